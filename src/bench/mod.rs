@@ -1,0 +1,5 @@
+//! The figures printed by `quadcl bench`: each section adds its keys to one
+//! JSON object, so scripts can read them by name.
+
+pub mod env;
+pub mod nn;

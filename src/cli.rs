@@ -1,0 +1,35 @@
+//! The command line: one clap subcommand per job; each is implemented in its
+//! own file under `cmd/`.
+
+use clap::{Parser, Subcommand};
+
+/// quadcl: continual reinforcement learning on a simulated quadruped.
+///
+/// Train one policy on a sequence of locomotion tasks (broken, inverted or
+/// noisy legs) with per-task binary masks, so that no task is forgotten.
+#[derive(Debug, Parser)]
+#[command(name = "quadcl", version, about, long_about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Throughput figures: environment steps per second, masked network train steps.
+    Bench(crate::cmd::bench::BenchArgs),
+    /// Per network, layer and task: selected, vacant, occupied and private parameter counts.
+    Masks(crate::cmd::masks::MasksArgs),
+}
+
+/// Runs the chosen subcommand. Without one, says what there is to run.
+pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Some(Command::Bench(args)) => crate::cmd::bench::run(args),
+        Some(Command::Masks(args)) => crate::cmd::masks::run(args),
+        None => {
+            crate::cmd::welcome::run();
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,27 @@
+//! `quadcl bench`: throughput figures, as JSON or a readable table.
+
+use clap::Args;
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Seconds to spend on each measurement.
+    #[arg(long, default_value_t = 2.0)]
+    pub seconds: f64,
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    let mut report = serde_json::Map::new();
+    crate::bench::env::measure(args.seconds, &mut report)?;
+    crate::bench::nn::measure(args.seconds, &mut report)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&serde_json::Value::Object(report))?);
+    } else {
+        for (key, value) in &report {
+            println!("{key:<36} {value}");
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,5 @@
+//! One file per CLI subcommand: thin glue between the command line and the modules.
+
+pub mod bench;
+pub mod masks;
+pub mod welcome;

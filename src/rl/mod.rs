@@ -1,0 +1,1 @@
+//! The learner: PPO with a privileged critic and a context estimator.

@@ -1,0 +1,1 @@
+//! The simulated quadruped, in rapier3d only: knows nothing of networks or UI.
