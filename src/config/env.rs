@@ -132,8 +132,8 @@ impl Default for EnvConfig {
     fn default() -> Self {
         Self {
             urdf: "scenes/a1.urdf".into(),
-            physics_dt: 0.01,
-            decimation: 2,
+            physics_dt: 0.005,
+            decimation: 4,
             solver_iterations: 1,
             kp: 20.0,
             kd: 0.5,

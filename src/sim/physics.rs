@@ -72,6 +72,8 @@ pub struct RobotSim {
     strength: f32,
     /// Current PD position targets, rad.
     targets: [f32; 12],
+    /// PD torques (clamped) at the start of the last physics step, N m.
+    last_torques: [f32; 12],
 }
 
 impl RobotSim {
@@ -182,6 +184,7 @@ impl RobotSim {
             kd,
             strength: params.motor_strength,
             targets: *q0,
+            last_torques: [0.0; 12],
         };
         sim.init_gains();
         sim.set_pose(height, q0);
@@ -234,13 +237,14 @@ impl RobotSim {
         self.targets = *targets;
     }
 
-    /// The torque the PD law asks for at the current state, clamped to the effort limits, N m.
-    pub fn pd_torques(&self, q: &[f32; 12], qd: &[f32; 12]) -> [f32; 12] {
-        let s = self.strength;
-        std::array::from_fn(|i| {
-            let tau = s * (self.kp * (self.targets[i] - q[i]) - self.kd * qd[i]);
-            tau.clamp(-self.effort[i] * s, self.effort[i] * s)
-        })
+    /// The current PD targets, rad.
+    pub fn targets(&self) -> &[f32; 12] {
+        &self.targets
+    }
+
+    /// The PD torques (clamped to the effort limits) at the start of the last physics step, N m.
+    pub fn last_torques(&self) -> &[f32; 12] {
+        &self.last_torques
     }
 
     /// Advances the world by one physics step. The PD law acts inside
@@ -260,6 +264,7 @@ impl RobotSim {
             let qd = mb.joint_velocity(link)[0];
             let tau = kp * (targets[i] - q) - kd * qd;
             let rest = if tau.abs() <= effort[i] { targets[i] } else { q + (effort[i].copysign(tau) + kd * qd) / kp };
+            self.last_torques[i] = tau.clamp(-effort[i], effort[i]);
             mb.link_mut(id).expect("leg link exists").joint.set_spring(3, kp, rest);
         }
         self.world.step();
