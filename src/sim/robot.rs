@@ -108,7 +108,10 @@ impl RobotModel {
 
     /// Parses and validates URDF text; `path` is only used in messages.
     pub fn from_urdf_str(text: &str, path: &Path) -> anyhow::Result<Self> {
-        let mut urdf = urdf_rs::read_from_string(text).map_err(|e| anyhow!("malformed URDF: {e}"))?;
+        let mut urdf = urdf_rs::read_from_string(text).map_err(|e| match find_bad_number(text) {
+            Some(bad) => anyhow!("bad number: {bad} ({e})"),
+            None => anyhow!("malformed URDF: {e}"),
+        })?;
         strip_meshes(&mut urdf, path);
         let trunk_link = find_root(&urdf)?;
         let legs = find_legs(&urdf, trunk_link)?;
@@ -156,6 +159,30 @@ impl RobotModel {
     pub fn trunk_name(&self) -> &str {
         &self.urdf.links[self.trunk_link].name
     }
+}
+
+/// Attributes whose value is one or more numbers.
+const NUMERIC_ATTRIBUTES: [&str; 17] = [
+    "value", "xyz", "rpy", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "lower", "upper", "effort", "velocity", "radius", "length", "size",
+    "scale",
+];
+
+/// The first numeric attribute that does not parse, as "line N: name=\"value\"".
+fn find_bad_number(text: &str) -> Option<String> {
+    for (line_no, line) in text.lines().enumerate() {
+        let mut rest = line;
+        while let Some(eq) = rest.find("=\"") {
+            let name = rest[..eq].rsplit(|c: char| c.is_whitespace() || c == '<').next().unwrap_or("");
+            let after = &rest[eq + 2..];
+            let Some(close) = after.find('"') else { break };
+            let value = &after[..close];
+            if NUMERIC_ATTRIBUTES.contains(&name) && value.split_whitespace().any(|t| t.parse::<f64>().is_err()) {
+                return Some(format!("line {}: {name}=\"{value}\" is not a number", line_no + 1));
+            }
+            rest = &after[close + 1..];
+        }
+    }
+    None
 }
 
 /// Removes mesh geometry (quadcl loads no meshes), warning once per mesh.
