@@ -33,6 +33,30 @@ fn zero_action_stands_at_a_stable_trunk_height_for_ten_seconds() {
     assert!(lo > 0.22 && hi < 0.34, "standing height {lo}..{hi}");
     // Upright: projected gravity close to (0, 0, -1).
     assert!(env.observation()[5] < -0.99, "gravity {:?}", &env.observation()[3..6]);
+    // On its four feet, nothing else touching.
+    let contacts = &env.privileged_observation()[obs::PRIV_FOOT_CONTACTS..obs::PRIV_FOOT_CONTACTS + 4];
+    assert_eq!(contacts, [1.0; 4]);
+}
+
+#[test]
+fn commands_are_resampled_every_ten_seconds_within_their_ranges() {
+    let cfg = quiet_config();
+    let mut env = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+    let per_resample = (cfg.command_resample_s / cfg.policy_dt()).round() as usize;
+    let first = env.command();
+    for k in 1..=per_resample {
+        env.step(&[0.0; ACT_DIM]).unwrap();
+        if k < per_resample {
+            assert_eq!(env.command(), first, "changed at step {k}");
+        }
+    }
+    let second = env.command();
+    assert_ne!(second, first);
+    for c in [first, second] {
+        assert!((-1.0..=1.0).contains(&c[0]) && c[1] == 0.0 && c[2].abs() <= std::f32::consts::FRAC_PI_2, "{c:?}");
+    }
+    // The observation carries the scaled command.
+    assert_eq!(env.observation()[6], second[0] * 2.0);
 }
 
 /// One step with the same action on every joint; returns (targets - default) / action_scale.
@@ -184,7 +208,14 @@ fn same_seed_is_bit_identical_with_one_and_two_threads() {
 #[test]
 fn different_envs_in_a_batch_get_different_randomisation() {
     let envs = VecEnv::new(&EnvConfig::default(), &robot(), &Perturbation::none(), 3, 1).unwrap();
-    let p: Vec<_> = envs.envs().iter().map(|e| e.physics_params().friction).collect();
-    assert!(p[0] != p[1] && p[1] != p[2], "{p:?}");
-    assert!(p.iter().all(|f| (0.5..1.25).contains(f)), "{p:?}");
+    let p: Vec<_> = envs.envs().iter().map(|e| e.physics_params()).collect();
+    assert!(p[0].friction != p[1].friction && p[1].friction != p[2].friction, "{p:?}");
+    for q in &p {
+        assert!((0.5..1.25).contains(&q.friction), "{q:?}");
+        assert!((-1.0..1.0).contains(&q.added_mass), "{q:?}");
+        assert!((0.9..1.1).contains(&q.motor_strength), "{q:?}");
+    }
+    // The critic sees them.
+    let row = &envs.privileged_observations()[obs::PRIV_PHYSICS..obs::PRIV_PHYSICS + 3];
+    assert_eq!(row, [p[0].friction, p[0].added_mass, p[0].motor_strength]);
 }

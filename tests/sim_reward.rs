@@ -73,8 +73,8 @@ fn each_term_is_weight_times_value_times_policy_dt() {
         -2e-4 * 25.0,
         -2.5e-7 * 50_000.0,
         -30.0 * 0.0025,
-        -1.0 * (0.0128 + 0.005),
-        -1.0 * 3.0,
+        -(0.0128 + 0.005),
+        -3.0,
         -0.01 * 4.25,
     ];
     for (i, name) in TERM_NAMES.iter().enumerate() {

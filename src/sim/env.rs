@@ -417,5 +417,5 @@ fn soft_limit(robot: &RobotModel, cfg: &EnvConfig, i: usize) -> (f32, f32) {
 }
 
 fn build_sim(cfg: &EnvConfig, robot: &RobotModel, params: PhysicsParams, q0: &[f32; 12]) -> anyhow::Result<RobotSim> {
-    RobotSim::new(robot, params, cfg.physics_dt, cfg.solver_iterations, cfg.start_height, q0, cfg.kp, cfg.kd)
+    RobotSim::new(robot, cfg, params, q0)
 }

@@ -11,6 +11,7 @@
 
 use super::robot::{Leg, RobotModel, NUM_LEGS};
 use super::terrain;
+use crate::config::EnvConfig;
 use rapier3d::math::{Pose, Vector};
 use rapier3d::prelude::*;
 use rapier3d_urdf::{UrdfLoaderOptions, UrdfMultibodyOptions, UrdfRobot};
@@ -77,17 +78,10 @@ pub struct RobotSim {
 }
 
 impl RobotSim {
-    /// Builds the world: ground, robot at `height` in pose `q0` (12 joint angles), at rest.
-    pub fn new(
-        robot: &RobotModel,
-        params: PhysicsParams,
-        dt: f32,
-        solver_iterations: usize,
-        height: f32,
-        q0: &[f32; 12],
-        kp: f32,
-        kd: f32,
-    ) -> anyhow::Result<Self> {
+    /// Builds the world: ground, robot at `cfg.start_height` in pose `q0`
+    /// (12 joint angles), at rest; step, solver and gains from `cfg`.
+    pub fn new(robot: &RobotModel, cfg: &EnvConfig, params: PhysicsParams, q0: &[f32; 12]) -> anyhow::Result<Self> {
+        let (dt, solver_iterations, height, kp, kd) = (cfg.physics_dt, cfg.solver_iterations, cfg.start_height, cfg.kp, cfg.kd);
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(0.0, 0.0, -9.81);
         let ip = &mut world.integration_parameters;
