@@ -1,0 +1,1 @@
+//! Policy directories (placeholder while building).

@@ -1,0 +1,1 @@
+//! Mask statistics (placeholder while building).
