@@ -203,8 +203,8 @@ impl MaskedLinear {
         Ok(t)
     }
 
-    /// Training forward with the current task's hard mask (batch, in) -> (batch, out), differentiable.
-    pub fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+    /// The training effective weight W * M_ste (out, in) and the current bias (out,), both differentiable.
+    pub fn training_weight(&self) -> anyhow::Result<(Tensor, Tensor)> {
         let t = self.training_ready()?;
         let mask = t.mask.as_ref().expect("checked by training_ready");
         let weight = self.weight.as_tensor();
@@ -216,11 +216,17 @@ impl MaskedLinear {
             }
             None => weight.mul(mask)?,
         };
-        Ok(x.matmul(&effective.t()?)?.broadcast_add(t.bias.as_tensor())?)
+        Ok((effective, t.bias.as_tensor().clone()))
+    }
+
+    /// Training forward with the current task's hard mask (batch, in) -> (batch, out), differentiable.
+    pub fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+        let (effective, bias) = self.training_weight()?;
+        Ok(x.matmul(&effective.t()?)?.broadcast_add(&bias)?)
     }
 
     /// Effective weights W * M_t of a finished task, with exact zeros outside the mask.
-    fn recall_weight(&self, task: TaskId) -> anyhow::Result<(Tensor, Tensor)> {
+    pub fn recall_weight(&self, task: TaskId) -> anyhow::Result<(Tensor, Tensor)> {
         let m = self.masks.get(&task).with_context(|| format!("{}: task {task} has not finished (no mask)", self.name))?;
         let w = var_values(&self.weight)?;
         let eff: Vec<f32> = w.iter().enumerate().map(|(i, &w)| if m.get(i) { w } else { 0.0 }).collect();

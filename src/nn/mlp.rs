@@ -6,6 +6,7 @@
 //! Shapes: x (batch, sizes[0]) -> (batch, sizes[last]).
 
 use super::activation::activate;
+use super::fused::fused_mlp;
 use super::masked::MaskedLinear;
 use super::state::TaskId;
 use super::Param;
@@ -87,26 +88,43 @@ impl MaskedMlp {
         self.layers.iter_mut().try_for_each(|l| l.begin_iteration(iteration, rng))
     }
 
-    fn run(&self, x: &Tensor, layer: impl Fn(&MaskedLinear, &Tensor) -> anyhow::Result<Tensor>) -> anyhow::Result<Tensor> {
+    /// Concatenates every layer's (weight, bias) into the fused op's theta and runs it.
+    fn run(&self, x: &Tensor, weights: Vec<(Tensor, Tensor)>, track: bool) -> anyhow::Result<Tensor> {
+        let dims = x.dims();
+        anyhow::ensure!(dims.len() == 2 && dims[1] == self.sizes[0], "{}: input shape {dims:?}, expected (batch, {})", self.name, self.sizes[0]);
+        let mut parts = Vec::with_capacity(2 * weights.len());
+        for (w, b) in weights {
+            parts.push(w.flatten_all()?);
+            parts.push(b);
+        }
+        let theta = Tensor::cat(&parts, 0)?;
+        Ok(fused_mlp(&self.sizes, self.activation, x, &theta, track)?)
+    }
+
+    /// Training forward with the current task's masks, (batch, in) -> (batch, out), differentiable.
+    pub fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+        let weights = self.layers.iter().map(|l| l.training_weight()).collect::<anyhow::Result<_>>()?;
+        self.run(x, weights, true)
+    }
+
+    /// Recall a finished task (W*M_t + b_t), bit-identical forever.
+    pub fn forward_task(&self, task: TaskId, x: &Tensor) -> anyhow::Result<Tensor> {
+        let weights = self.layers.iter().map(|l| l.recall_weight(task)).collect::<anyhow::Result<_>>()?;
+        self.run(x, weights, false)
+    }
+
+    /// The same forward as [`MaskedMlp::forward`] with candle's stock ops, layer by layer
+    /// (the reference the fused op is tested against).
+    pub fn forward_unfused(&self, x: &Tensor) -> anyhow::Result<Tensor> {
         let last = self.layers.len() - 1;
         let mut h = x.clone();
         for (i, l) in self.layers.iter().enumerate() {
-            h = layer(l, &h)?;
+            h = l.forward(&h)?;
             if i < last {
                 h = activate(self.activation, &h)?;
             }
         }
         Ok(h)
-    }
-
-    /// Training forward with the current task's masks, (batch, in) -> (batch, out), differentiable.
-    pub fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
-        self.run(x, |l, h| l.forward(h))
-    }
-
-    /// Recall a finished task (W*M_t + b_t), bit-identical forever.
-    pub fn forward_task(&self, task: TaskId, x: &Tensor) -> anyhow::Result<Tensor> {
-        self.run(x, |l, h| l.forward_task(task, h))
     }
 
     /// Scalar -beta_H * H summed over layers (METHOD 2.3); 0 when off or after E iterations.

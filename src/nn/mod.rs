@@ -13,6 +13,7 @@
 pub mod activation;
 pub mod bitmask;
 pub mod checkpoint;
+pub mod fused;
 pub mod masked;
 pub mod mlp;
 pub mod optim;
