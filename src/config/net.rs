@@ -60,6 +60,9 @@ pub struct MaskConfig {
     pub sigma_decay: f64,
     /// Lower bound of sigma.
     pub sigma_floor: f64,
+    /// Upper bound of sigma: Adam moves the one sigma per layer by about the learning rate per
+    /// step whatever beta_H is, so without a bound the entropy term would drown the scores' ranking.
+    pub sigma_max: f64,
     /// Re-initialise vacant weights and redraw soft-score means at the end of each task (METHOD.md 2.4).
     pub reinit: bool,
     /// Forward-transfer bonus on related tasks' elements, in units of `score_init_std` (METHOD.md 2.6).
@@ -80,6 +83,7 @@ impl Default for MaskConfig {
             entropy_iterations: 100,
             sigma_decay: 0.99,
             sigma_floor: 1e-3,
+            sigma_max: 0.05,
             reinit: true,
             transfer_bonus: 3.0,
         }
@@ -99,6 +103,7 @@ impl MaskConfig {
         in_unit("sigma_decay", self.sigma_decay)?;
         anyhow::ensure!(self.score_init_std > 0.0, "net.mask.score_init_std must be > 0");
         anyhow::ensure!(self.sigma_init >= 0.0 && self.sigma_floor >= 0.0, "net.mask.sigma_init and sigma_floor must be >= 0");
+        anyhow::ensure!(self.sigma_max >= self.sigma_floor, "net.mask.sigma_max ({}) must be >= sigma_floor ({})", self.sigma_max, self.sigma_floor);
         Ok(())
     }
 }

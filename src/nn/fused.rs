@@ -106,12 +106,15 @@ pub fn theta_len(sizes: &[usize]) -> usize {
     offsets(sizes).1
 }
 
+/// What a forward keeps for its backward: the input, every hidden layer's output, theta.
+type Saved = (Vec<f32>, Vec<Vec<f32>>, Vec<f32>);
+
 /// The fused MLP op; one instance per forward call (it keeps that call's activations).
 pub struct FusedMlp {
     sizes: Vec<usize>,
     activation: Activation,
     /// (input, hidden outputs after activation) of the forward, for backward.
-    saved: Mutex<Option<(Vec<f32>, Vec<Vec<f32>>, Vec<f32>)>>,
+    saved: Mutex<Option<Saved>>,
 }
 
 impl FusedMlp {

@@ -129,6 +129,21 @@ impl MaskedLinear {
         &self.states
     }
 
+    /// The base weights W, row-major (out * in).
+    pub fn weight_values(&self) -> anyhow::Result<Vec<f32>> {
+        var_values(&self.weight)
+    }
+
+    /// The current soft-score sigma of the layer.
+    pub fn sigma(&self) -> anyhow::Result<f32> {
+        Ok(var_values(&self.sigma)?[0])
+    }
+
+    /// The hard mask (out, in) of the current training iteration, if one was drawn.
+    pub fn iteration_mask(&self) -> Option<&Tensor> {
+        self.training.as_ref().and_then(|t| t.mask.as_ref())
+    }
+
     /// The stored mask of a finished task.
     pub fn task_mask(&self, task: TaskId) -> Option<&BitMask> {
         self.masks.get(&task)
@@ -164,7 +179,7 @@ impl MaskedLinear {
     }
 
     /// Once per training iteration: draw S = mu + sigma * eps, choose the hard mask, set the update masks.
-    /// After E iterations sigma decays (x decay, floor); before, it is kept above the floor.
+    /// After E iterations sigma decays (x decay, floor); it is always kept in [floor, max].
     pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
         let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);
         let params = self.params();
@@ -183,7 +198,7 @@ impl MaskedLinear {
         if iteration >= self.cfg.entropy_iterations {
             sigma *= self.cfg.sigma_decay as f32;
         }
-        sigma = sigma.max(self.cfg.sigma_floor as f32);
+        sigma = sigma.clamp(self.cfg.sigma_floor as f32, self.cfg.sigma_max as f32);
         set_var(&self.sigma, vec![sigma])?;
         let mu = var_values(&self.score_mean)?;
         let eps: Vec<f32> = (0..n).map(|_| StandardNormal.sample(rng)).collect();

@@ -53,7 +53,10 @@ pub struct MaskedAdam {
 
 const CHUNK: usize = 1 << 13;
 
-fn grad_and_mask(p: &Param, grads: &GradStore) -> anyhow::Result<Option<(Vec<f32>, Option<Vec<f32>>)>> {
+/// A parameter's gradient and update mask as flat vectors.
+type GradAndMask = (Vec<f32>, Option<Vec<f32>>);
+
+fn grad_and_mask(p: &Param, grads: &GradStore) -> anyhow::Result<Option<GradAndMask>> {
     let Some(g) = grads.get(p.var.as_tensor()) else { return Ok(None) };
     let g = g.flatten_all()?.to_vec1::<f32>()?;
     let m = match &p.update_mask {
@@ -187,7 +190,7 @@ mod tests {
         let p = Param { name: "w".into(), var: var.clone(), update_mask: None };
         let mut grads = (var.as_tensor().sqr().unwrap().sum_all().unwrap() * 0.5).unwrap().backward().unwrap();
         let opt = MaskedAdam::new(AdamConfig::default());
-        let norm = opt.clip_grad_norm(&[p.clone()], &mut grads, 1.0).unwrap();
+        let norm = opt.clip_grad_norm(std::slice::from_ref(&p), &mut grads, 1.0).unwrap();
         assert!((norm - 5.0).abs() < 1e-6);
         let g = grads.get(var.as_tensor()).unwrap().to_vec1::<f32>().unwrap();
         assert!(((g[0] * g[0] + g[1] * g[1]).sqrt() - 1.0).abs() < 1e-4);
