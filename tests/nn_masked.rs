@@ -155,6 +155,7 @@ fn fused_forward_matches_the_layer_by_layer_forward() {
     net.begin_iteration(0, &mut rng).unwrap();
     let x = probe();
     let (a, b) = (flat(&net.forward(&x).unwrap()), flat(&net.forward_unfused(&x).unwrap()));
+    assert_eq!(a, flat(&net.forward_no_grad(&x).unwrap()), "forward_no_grad differs from forward");
     for (a, b) in a.iter().zip(&b) {
         assert!((a - b).abs() < 1e-5 * (1.0 + b.abs()), "{a} vs {b}");
     }

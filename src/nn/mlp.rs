@@ -107,6 +107,17 @@ impl MaskedMlp {
         self.run(x, weights, true)
     }
 
+    /// The training forward's values without a gradient (no activations kept): for rollouts
+    /// with the current iteration's masks.
+    pub fn forward_no_grad(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+        let weights = self
+            .layers
+            .iter()
+            .map(|l| l.training_weight().map(|(w, b)| (w.detach(), b.detach())))
+            .collect::<anyhow::Result<_>>()?;
+        self.run(x, weights, false)
+    }
+
     /// Recall a finished task (W*M_t + b_t), bit-identical forever.
     pub fn forward_task(&self, task: TaskId, x: &Tensor) -> anyhow::Result<Tensor> {
         let weights = self.layers.iter().map(|l| l.recall_weight(task)).collect::<anyhow::Result<_>>()?;
