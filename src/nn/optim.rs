@@ -72,6 +72,12 @@ impl MaskedAdam {
         Self { cfg, moments: HashMap::new() }
     }
 
+    /// Forgets every moment: call at the start of each task (a new task's bias is a new
+    /// variable under the same name, and old moments must not push the new task).
+    pub fn reset(&mut self) {
+        self.moments.clear();
+    }
+
     /// Sets the learning rate (for schedules).
     pub fn set_learning_rate(&mut self, lr: f64) {
         self.cfg.learning_rate = lr;
