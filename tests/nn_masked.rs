@@ -155,7 +155,26 @@ fn fused_forward_matches_the_layer_by_layer_forward() {
     net.begin_iteration(0, &mut rng).unwrap();
     let x = probe();
     let (a, b) = (flat(&net.forward(&x).unwrap()), flat(&net.forward_unfused(&x).unwrap()));
+    assert_eq!(a, flat(&net.forward_no_grad(&x).unwrap()), "forward_no_grad differs from forward");
     for (a, b) in a.iter().zip(&b) {
         assert!((a - b).abs() < 1e-5 * (1.0 + b.abs()), "{a} vs {b}");
     }
+}
+
+#[test]
+fn misuse_of_the_task_life_cycle_is_an_error_not_a_panic() {
+    let (mut net, mut rng) = net_after(1, &MaskConfig::default());
+    assert!(net.forward(&probe()).is_err(), "forward without a task in progress");
+    assert!(net.forward_task(5, &probe()).is_err(), "recall of a task that never ran");
+    let err = net.begin_task(1, &[3]).unwrap_err().to_string();
+    assert!(err.contains("related task 3"), "{err}");
+    net.begin_task(1, &[0]).unwrap();
+    assert!(net.forward(&probe()).is_err(), "forward before begin_iteration");
+    assert!(net.begin_task(2, &[]).is_err(), "two tasks at once");
+    net.begin_iteration(0, &mut rng).unwrap();
+    net.end_task(&mut rng).unwrap();
+    assert!(net.end_task(&mut rng).is_err(), "end_task twice");
+    let bad = MaskConfig { capacity: 1.5, ..MaskConfig::default() };
+    let err = MaskedMlp::new("x", &[2, 2], quadcl::nn::Activation::Elu, &bad, 0).unwrap_err().to_string();
+    assert!(err.contains("capacity"), "{err}");
 }

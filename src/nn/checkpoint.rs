@@ -107,6 +107,9 @@ fn serialize(tensors: &BTreeMap<String, Raw>) -> anyhow::Result<Vec<u8>> {
 
 /// Writes a policy directory (creating it). `tasks` names every TaskId the networks use.
 pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras: &BTreeMap<String, Tensor>, config: &serde_json::Value) -> anyhow::Result<()> {
+    for (i, a) in networks.iter().enumerate() {
+        ensure!(networks[..i].iter().all(|b| b.name() != a.name()), "{}: two networks are called {:?}", dir.display(), a.name());
+    }
     let mut model = BTreeMap::new();
     let mut masks = BTreeMap::new();
     let mut entries = Vec::new();

@@ -80,6 +80,13 @@ impl MaskedMlp {
     /// New task: fresh per-task bias, soft scores (+ forward-transfer bonus on related tasks' masks);
     /// an already finished task => fine-tune mode (only its private elements and bias train).
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
+        // Checked here first so that no layer starts when another would refuse.
+        if let Some(current) = self.current_task() {
+            anyhow::bail!("{}: begin_task({task}) while task {current} is still in progress (call end_task first)", self.name);
+        }
+        if let Some(r) = related.iter().find(|r| !self.finished_tasks().contains(r)) {
+            anyhow::bail!("{}: related task {r} has not finished (finished: {:?})", self.name, self.finished_tasks());
+        }
         self.layers.iter_mut().try_for_each(|l| l.begin_task(task, related))
     }
 
@@ -105,6 +112,17 @@ impl MaskedMlp {
     pub fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
         let weights = self.layers.iter().map(|l| l.training_weight()).collect::<anyhow::Result<_>>()?;
         self.run(x, weights, true)
+    }
+
+    /// The training forward's values without a gradient (no activations kept): for rollouts
+    /// with the current iteration's masks.
+    pub fn forward_no_grad(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+        let weights = self
+            .layers
+            .iter()
+            .map(|l| l.training_weight().map(|(w, b)| (w.detach(), b.detach())))
+            .collect::<anyhow::Result<_>>()?;
+        self.run(x, weights, false)
     }
 
     /// Recall a finished task (W*M_t + b_t), bit-identical forever.

@@ -5,7 +5,8 @@
 //! - [`select`]: the selection rules as pure functions;
 //! - [`masked`]: [`MaskedLinear`], where the algorithm lives;
 //! - [`mlp`]: [`MaskedMlp`] (actor, critic, CENet);
-//! - [`activation`]: fused ELU as candle custom ops;
+//! - [`fused`]: the whole MLP as one candle custom op (the speed path: gemm on slices, one backward pass);
+//! - [`activation`]: a fused ELU as candle custom ops (layer-by-layer reference path);
 //! - [`optim`]: [`MaskedAdam`], which never moves a frozen element;
 //! - [`checkpoint`]: policy directories (safetensors + bit-packed masks + manifest);
 //! - [`stats`]: the mask statistics printed by `quadcl masks`.

@@ -72,6 +72,12 @@ impl MaskedAdam {
         Self { cfg, moments: HashMap::new() }
     }
 
+    /// Forgets every moment: call at the start of each task (a new task's bias is a new
+    /// variable under the same name, and old moments must not push the new task).
+    pub fn reset(&mut self) {
+        self.moments.clear();
+    }
+
     /// Sets the learning rate (for schedules).
     pub fn set_learning_rate(&mut self, lr: f64) {
         self.cfg.learning_rate = lr;
@@ -194,5 +200,15 @@ mod tests {
         assert!((norm - 5.0).abs() < 1e-6);
         let g = grads.get(var.as_tensor()).unwrap().to_vec1::<f32>().unwrap();
         assert!(((g[0] * g[0] + g[1] * g[1]).sqrt() - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn clipping_norm_counts_only_elements_that_may_move() {
+        let var = Var::from_slice(&[3.0f32, 4.0, 100.0], 3, &Device::Cpu).unwrap();
+        let mask = Tensor::from_slice(&[1.0f32, 1.0, 0.0], 3, &Device::Cpu).unwrap();
+        let p = Param { name: "w".into(), var: var.clone(), update_mask: Some(mask) };
+        let mut grads = (var.as_tensor().sqr().unwrap().sum_all().unwrap() * 0.5).unwrap().backward().unwrap();
+        let norm = MaskedAdam::new(AdamConfig::default()).clip_grad_norm(std::slice::from_ref(&p), &mut grads, 10.0).unwrap();
+        assert!((norm - 5.0).abs() < 1e-6, "norm {norm}");
     }
 }
