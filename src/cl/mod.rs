@@ -2,3 +2,4 @@
 //! measures (Continual World conventions, METHOD.md section 4).
 
 pub mod metrics;
+pub mod sequence;

@@ -1,0 +1,145 @@
+//! Task sequences: which perturbed-leg tasks a run trains, in which order,
+//! with which budget and which related tasks (METHOD.md 2.5, 2.6), read from
+//! a TOML file under `scenes/`.
+//!
+//! ```toml
+//! [[task]]
+//! name = "crash:FL"          # the perturbation syntax of sim::tasks
+//! iterations = 200           # PPO iterations for this task (optional)
+//! [[task]]
+//! name = "invert:RR+noise:FR"
+//! related = ["invert:RR", "noise:FR"]  # forward transfer (METHOD.md 2.6)
+//! init = "related"           # related | random | scratch
+//! ```
+//!
+//! A task name may come back later in the sequence: it is then fine-tuned on
+//! its private parameters only (METHOD.md 2.5).
+
+use crate::sim::Perturbation;
+use serde::{Deserialize, Serialize};
+use std::str::FromStr;
+
+/// How a new task's soft scores start (METHOD.md 2.6).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TransferInit {
+    /// A bonus on the elements the named related tasks select.
+    #[default]
+    Related,
+    /// The same bonus on as many other learned tasks, drawn at random.
+    Random,
+    /// No bonus.
+    Scratch,
+}
+
+/// One entry of a sequence.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSpec {
+    /// The perturbation, e.g. `invert:RR+noise:FR`; `none` is the base task.
+    pub name: String,
+    /// PPO iterations for this task; the sequence default when absent.
+    #[serde(default)]
+    pub iterations: Option<usize>,
+    /// Earlier tasks whose masks seed this task's soft scores.
+    #[serde(default)]
+    pub related: Vec<String>,
+    /// How the soft scores start.
+    #[serde(default)]
+    pub init: TransferInit,
+}
+
+/// A whole sequence, as written in TOML.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sequence {
+    /// PPO iterations of a task that names none.
+    #[serde(default = "default_iterations")]
+    pub iterations: usize,
+    /// The tasks in training order.
+    #[serde(rename = "task")]
+    pub tasks: Vec<TaskSpec>,
+}
+
+fn default_iterations() -> usize {
+    300
+}
+
+impl Sequence {
+    /// Checks every name and reference; the error names the entry (1-based)
+    /// and what is wrong.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        anyhow::ensure!(!self.tasks.is_empty(), "the sequence has no [[task]] entries");
+        for (i, task) in self.tasks.iter().enumerate() {
+            let at = || format!("task {} ({})", i + 1, task.name);
+            Perturbation::from_str(&task.name).map_err(|e| anyhow::anyhow!("{}: {e}", at()))?;
+            if task.iterations == Some(0) {
+                anyhow::bail!("{}: iterations must be at least 1", at());
+            }
+            for related in &task.related {
+                let earlier = self.tasks[..i].iter().any(|t| &t.name == related);
+                anyhow::ensure!(
+                    earlier,
+                    "{}: related task {related:?} is not trained earlier in the sequence",
+                    at()
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The distinct task names in order of first appearance (the columns of
+    /// the evaluation matrix and the learner's task ids).
+    pub fn distinct_tasks(&self) -> Vec<String> {
+        let mut names: Vec<String> = Vec::new();
+        for t in &self.tasks {
+            if !names.contains(&t.name) {
+                names.push(t.name.clone());
+            }
+        }
+        names
+    }
+
+    /// The iteration budget of entry `i`.
+    pub fn iterations_of(&self, i: usize) -> usize {
+        self.tasks[i].iterations.unwrap_or(self.iterations)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> anyhow::Result<Sequence> {
+        let seq: Sequence = toml::from_str(text)?;
+        seq.validate()?;
+        Ok(seq)
+    }
+
+    #[test]
+    fn repeats_keep_one_column_per_distinct_task() {
+        let seq = parse(
+            "iterations = 5\n[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\niterations = 7\n[[task]]\nname = \"crash:FL\"\n",
+        )
+        .unwrap();
+        assert_eq!(seq.distinct_tasks(), vec!["crash:FL", "invert:RR"]);
+        assert_eq!(seq.iterations_of(0), 5);
+        assert_eq!(seq.iterations_of(1), 7);
+    }
+
+    #[test]
+    fn an_unknown_task_name_is_an_error_naming_the_entry() {
+        let err = format!("{:#}", parse("[[task]]\nname = \"none\"\n[[task]]\nname = \"wobble:FL\"\n").unwrap_err());
+        assert!(err.contains("task 2") && err.contains("wobble"), "{err}");
+    }
+
+    #[test]
+    fn a_related_task_must_come_earlier() {
+        let err = format!(
+            "{:#}",
+            parse("[[task]]\nname = \"invert:RR+noise:FR\"\nrelated = [\"invert:RR\"]\n[[task]]\nname = \"invert:RR\"\n")
+                .unwrap_err()
+        );
+        assert!(err.contains("not trained earlier"), "{err}");
+    }
+}
