@@ -2,7 +2,8 @@
 //! step(action) -> Step, legged_gym conventions (DESIGN.md, "The environment").
 //!
 //! A policy step: clip the action (ACT_DIM,), apply the task perturbation,
-//! set PD targets = default + action_scale * action, run `decimation`
+//! set PD targets = default + action_scale * action (clamped to the joint
+//! range), run `decimation`
 //! physics steps, then read the state, compute the Table 1 reward, check
 //! termination (trunk contact or tilt) and time-out, resample the command
 //! every `command_resample_s`, push every `push_interval_s`, and build the
@@ -216,6 +217,11 @@ impl LocomotionEnv {
         self.sim.targets()
     }
 
+    /// The PD torques (clamped to the effort limits) at the start of the last physics step, N m.
+    pub fn torques(&self) -> &[f32; 12] {
+        self.sim.last_torques()
+    }
+
     /// The task perturbation.
     pub fn task(&self) -> &Perturbation {
         &self.task
@@ -247,7 +253,12 @@ impl LocomotionEnv {
         let policy_action: [f32; 12] = std::array::from_fn(|i| action[i].clamp(-clip, clip));
         let mut applied = policy_action;
         self.task.apply(&mut applied, c.noise_std, &mut self.rng);
-        let targets: [f32; 12] = std::array::from_fn(|i| self.default_q[i] + c.action_scale * applied[i]);
+        // Targets stay inside the joint range, so the PD spring never pulls a joint
+        // into its limit (rapier's limits only push back once violated).
+        let targets: [f32; 12] = std::array::from_fn(|i| {
+            let joint = &self.robot.joints[i];
+            (self.default_q[i] + c.action_scale * applied[i]).clamp(joint.lower, joint.upper)
+        });
         self.sim.set_targets(&targets);
 
         let prev = self.state;
