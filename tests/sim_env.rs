@@ -260,3 +260,20 @@ fn joint_limits_and_effort_limits_from_the_urdf_hold() {
     }
     assert!(saturated, "the thigh swing should saturate some motor");
 }
+
+#[test]
+fn non_finite_physics_is_an_error_naming_the_env_step_and_quantity() {
+    let mut env = LocomotionEnv::new(&quiet_config(), &robot(), &Perturbation::none()).unwrap();
+    env.step(&[0.0; ACT_DIM]).unwrap();
+    env.push([f32::NAN, 0.0]);
+    let err = format!("{:#}", env.step(&[0.0; ACT_DIM]).unwrap_err());
+    assert!(err.contains("env 0") && err.contains("step 2"), "{err}");
+    assert!(err.contains("non-finite") || err.contains("rapier failed"), "{err}");
+}
+
+#[test]
+fn a_meaningless_config_is_an_error_not_a_panic() {
+    let cfg = EnvConfig { kd: f32::INFINITY, ..quiet_config() };
+    let err = format!("{:#}", LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).err().unwrap());
+    assert!(err.contains("env.kd"), "{err}");
+}

@@ -42,6 +42,8 @@ pub struct Step {
 /// Summary of one finished episode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EpisodeSummary {
+    /// Index of the env in its batch (0 for a lone env).
+    pub env: usize,
     /// Sum of step rewards.
     pub episode_return: f32,
     /// Simulated seconds.
@@ -262,8 +264,16 @@ impl LocomotionEnv {
         self.sim.set_targets(&targets);
 
         let prev = self.state;
-        for _ in 0..c.decimation {
-            self.sim.step();
+        for substep in 0..c.decimation {
+            self.sim.step().with_context(|| {
+                format!(
+                    "env {}: physics step {substep} of policy step {} (episode step {}, task {})",
+                    self.env_index,
+                    self.total_steps + 1,
+                    self.episode_step + 1,
+                    self.task
+                )
+            })?;
         }
         let state = self.sim.state();
         self.check_finite(&state)?;
@@ -338,6 +348,7 @@ impl LocomotionEnv {
         let finished = (terminated || truncated).then(|| {
             let n = self.episode_step as f32;
             EpisodeSummary {
+                env: self.env_index,
                 episode_return: self.ep_return,
                 length_s: n * dt,
                 lin_vel_err: self.ep_lin_err / n,

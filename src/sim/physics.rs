@@ -261,7 +261,7 @@ impl RobotSim {
     /// overshoots by up to velocity * dt (0.1 rad at 0.01 s). A joint that
     /// would cross a limit within this step instead gets, for this step, a
     /// very stiff implicit spring resting on the limit: a mechanical stop.
-    pub fn step(&mut self) {
+    pub fn step(&mut self) -> anyhow::Result<()> {
         let (kp, kd) = (self.kp * self.strength, self.kd * self.strength);
         let dt = self.world.integration_parameters.dt;
         let links = self.joint_links;
@@ -287,7 +287,16 @@ impl RobotSim {
             };
             mb.link_mut(id).expect("leg link exists").joint.set_spring(3, stiffness, rest);
         }
-        self.world.step();
+        // rapier may panic on non-finite state (e.g. a NaN bounding box); turn that
+        // into an error the env reports with its context.
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.world.step())).map_err(|payload| {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            anyhow::anyhow!("rapier failed inside a physics step: {what}")
+        })
     }
 
     /// Reads the robot state.

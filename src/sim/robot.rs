@@ -100,6 +100,17 @@ impl RobotModel {
         Self::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/a1.urdf"))
     }
 
+    /// Loads the description named by `cfg.urdf`: an absolute path, a path
+    /// relative to the working directory, or else relative to the crate root.
+    pub fn for_config(cfg: &crate::config::EnvConfig) -> anyhow::Result<Self> {
+        let path = Path::new(&cfg.urdf);
+        if path.is_absolute() || path.exists() {
+            Self::load(path)
+        } else {
+            Self::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(path))
+        }
+    }
+
     /// Reads and validates a URDF file. Errors name the file and the problem.
     pub fn load(path: &Path) -> anyhow::Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading robot description {}", path.display()))?;
