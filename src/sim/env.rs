@@ -12,7 +12,8 @@
 
 use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::physics::{PhysicsParams, RawState, RobotSim};
-use super::reward::{self, RewardInput, RewardTerms, NUM_TERMS};
+use super::episode::{EpisodeStats, Step};
+use super::reward::{self, RewardInput};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
 use crate::config::EnvConfig;
@@ -23,40 +24,6 @@ use std::sync::Arc;
 
 /// How long a push shows in the privileged observation, seconds.
 const PUSH_STATE_HOLD_S: f32 = 1.0;
-
-/// What one policy step returns.
-#[derive(Debug, Clone)]
-pub struct Step {
-    /// Sum of the reward terms.
-    pub reward: f32,
-    /// Each term's contribution.
-    pub terms: RewardTerms,
-    /// Fell (trunk contact or tilt): no bootstrap.
-    pub terminated: bool,
-    /// Episode time-out: bootstrap.
-    pub truncated: bool,
-    /// The finished episode's summary when terminated or truncated.
-    pub finished: Option<EpisodeSummary>,
-}
-
-/// Summary of one finished episode.
-#[derive(Debug, Clone, PartialEq)]
-pub struct EpisodeSummary {
-    /// Index of the env in its batch (0 for a lone env).
-    pub env: usize,
-    /// Sum of step rewards.
-    pub episode_return: f32,
-    /// Simulated seconds.
-    pub length_s: f32,
-    /// Mean |v_xy - v_xy_cmd| over the steps, m/s.
-    pub lin_vel_err: f32,
-    /// Mean |w_z - w_z_cmd| over the steps, rad/s.
-    pub ang_vel_err: f32,
-    /// Whether it ended by falling.
-    pub fell: bool,
-    /// Sum of each reward term over the episode, in `reward::TERM_NAMES` order.
-    pub term_sums: [f32; NUM_TERMS],
-}
 
 /// One simulated quadruped with its task.
 pub struct LocomotionEnv {
@@ -82,11 +49,7 @@ pub struct LocomotionEnv {
     obs: [f32; OBS_DIM],
     priv_obs: [f32; PRIV_OBS_DIM],
     history: Vec<f32>,
-    // Episode accumulators.
-    ep_return: f32,
-    ep_lin_err: f32,
-    ep_ang_err: f32,
-    ep_terms: [f32; NUM_TERMS],
+    episode: EpisodeStats,
 }
 
 impl LocomotionEnv {
@@ -125,10 +88,7 @@ impl LocomotionEnv {
             obs: [0.0; OBS_DIM],
             priv_obs: [0.0; PRIV_OBS_DIM],
             history: vec![0.0; HISTORY_LEN * OBS_DIM],
-            ep_return: 0.0,
-            ep_lin_err: 0.0,
-            ep_ang_err: 0.0,
-            ep_terms: [0.0; NUM_TERMS],
+            episode: EpisodeStats::default(),
         };
         env.reset(0)?;
         Ok(env)
@@ -162,10 +122,7 @@ impl LocomotionEnv {
         self.last_action = [0.0; 12];
         self.state = self.sim.state();
         self.foot_contacts = [false; 4];
-        self.ep_return = 0.0;
-        self.ep_lin_err = 0.0;
-        self.ep_ang_err = 0.0;
-        self.ep_terms = [0.0; NUM_TERMS];
+        self.episode = EpisodeStats::default();
         self.write_observations();
         for k in 0..HISTORY_LEN {
             self.history[k * OBS_DIM..(k + 1) * OBS_DIM].copy_from_slice(&self.obs);
@@ -310,12 +267,7 @@ impl LocomotionEnv {
         };
         let terms = reward::compute(&input, c);
         let step_reward = terms.total();
-        self.ep_return += step_reward;
-        for (sum, v) in self.ep_terms.iter_mut().zip(terms.values) {
-            *sum += v;
-        }
-        self.ep_lin_err += ((lin_vel[0] - self.command[0]).powi(2) + (lin_vel[1] - self.command[1]).powi(2)).sqrt();
-        self.ep_ang_err += (ang_vel[2] - self.command[2]).abs();
+        self.episode.add(&terms, lin_vel, ang_vel, self.command);
 
         let tilted = gravity[2] > -c.max_tilt_rad.cos();
         let terminated = trunk_contact || tilted;
@@ -345,18 +297,7 @@ impl LocomotionEnv {
         self.history.copy_within(OBS_DIM.., 0);
         self.history[(HISTORY_LEN - 1) * OBS_DIM..].copy_from_slice(&self.obs);
 
-        let finished = (terminated || truncated).then(|| {
-            let n = self.episode_step as f32;
-            EpisodeSummary {
-                env: self.env_index,
-                episode_return: self.ep_return,
-                length_s: n * dt,
-                lin_vel_err: self.ep_lin_err / n,
-                ang_vel_err: self.ep_ang_err / n,
-                fell: terminated,
-                term_sums: self.ep_terms,
-            }
-        });
+        let finished = (terminated || truncated).then(|| self.episode.summary(self.env_index, self.episode_step, dt, terminated));
         Ok(Step { reward: step_reward, terms, terminated, truncated, finished })
     }
 
