@@ -3,11 +3,13 @@
 //! and the state read back in the quantities the environment needs.
 //!
 //! rapier3d-urdf ignores effort limits and resets joints to zero, so the
-//! standing pose is applied after insertion and every motor is force-based
-//! (PD in N m / rad) with its max force set to the joint's effort limit
-//! (times the episode's motor strength). Only robot-ground contacts exist:
-//! robot colliders are in group 1 and see only group 2 (the ground), and
-//! self contacts are disabled. Bodies never sleep (determinism).
+//! standing pose is applied after insertion, and the PD law (Kp, Kd in
+//! N m / rad, times the episode's motor strength, clamped to each joint's
+//! effort limit) is applied here as rapier's implicit joint spring and
+//! damping rather than as solver motors (see [`RobotSim::step`]). Only
+//! robot-ground contacts exist: robot colliders are in group 1 and see only
+//! group 2 (the ground), and self contacts are disabled. Bodies never sleep
+//! (determinism).
 
 use super::robot::{Leg, RobotModel, NUM_LEGS};
 use super::terrain;
