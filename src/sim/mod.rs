@@ -6,7 +6,7 @@
 //! - [`tasks`]: leg perturbations (crash / invert / noise) and their syntax.
 //! - [`obs`]: observation and privileged-observation layouts.
 //! - [`reward`]: the paper's Table 1, one function per term.
-//! - [`env`]: `LocomotionEnv`, reset(seed) / step(action).
+//! - [`env`](mod@env): `LocomotionEnv`, reset(seed) / step(action).
 //! - [`episode`]: the step result and the finished-episode summary.
 //! - [`vec_env`]: a batch of envs stepped in parallel with rayon.
 
