@@ -62,6 +62,9 @@ fn bad_number_is_an_error_naming_the_file_and_the_value() {
     assert!(err.contains("bad_number.urdf"), "{err}");
     assert!(err.contains("bad number") && err.contains("4.7x13") && err.contains("line 11"), "{err}");
 
+    let err = load_err("nan_inertia.urdf", &a1_text().replacen("ixx=\"0.019886\"", "ixx=\"NaN\"", 1));
+    assert!(err.contains("nan_inertia.urdf") && err.contains("bad number") && err.contains("trunk"), "{err}");
+
     let err = load_err("bad_effort.urdf", &a1_text().replacen("effort=\"55\"", "effort=\"-55\"", 1));
     assert!(err.contains("bad_effort.urdf") && err.contains("FL_thigh_joint") && err.contains("effort"), "{err}");
 }
