@@ -221,7 +221,17 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
         let ctx = || format!("{}: network {}", manifest_path.display(), e.name);
         e.mask.validate().with_context(ctx)?;
         ensure!(e.sizes.len() == e.layers.len() + 1, "{}: {} sizes for {} layers", ctx(), e.sizes.len(), e.layers.len());
+        ensure!(!e.layers.is_empty() && e.sizes.iter().all(|s| *s > 0), "{}: no layers, or a zero size in {:?}", ctx(), e.sizes);
         ensure!(e.finish_order.iter().all(|t| *t < n_tasks), "{}: a finished task id is out of range of the {n_tasks} tasks", ctx());
+        for (i, t) in e.finish_order.iter().enumerate() {
+            ensure!(!e.finish_order[..i].contains(t), "{}: task {t} is listed twice in finish_order", ctx());
+        }
+        if let Some(tr) = &e.training {
+            ensure!(tr.task < n_tasks, "{}: the task in progress ({}) is out of range of the {n_tasks} tasks", ctx(), tr.task);
+            // A finished task can only be fine-tuned; a new one has no mask to fine-tune.
+            let finished = e.finish_order.contains(&tr.task);
+            ensure!(tr.fine_tune == finished, "{}: task {} in progress has fine_tune = {}, but it has {}finished", ctx(), tr.task, tr.fine_tune, if finished { "" } else { "not " });
+        }
         let mut layers = Vec::new();
         for (i, le) in e.layers.iter().enumerate() {
             let [out_dim, in_dim] = le.shape;
