@@ -118,8 +118,10 @@ fn edit_manifest(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
 }
 
 #[test]
-fn manifest_whose_task_life_cycle_is_inconsistent_is_an_error_not_a_later_panic() {
-    let cases: [(&str, fn(&mut serde_json::Value)); 5] = [
+fn inconsistent_manifest_is_an_error_not_a_later_panic() {
+    let cases: [(&str, fn(&mut serde_json::Value)); 6] = [
+        // The re-initialisation at the task's end would panic drawing from U(1, -1).
+        ("init_bound", |m| m["networks"][0]["layers"][1]["init_bound"] = (-1.0).into()),
         // Fine-tuning a task that never finished (it has no mask to fine-tune).
         ("fine_tune", |m| m["networks"][0]["training"]["fine_tune"] = true.into()),
         // A finished task trained again as if new: its end would overwrite its mask.

@@ -236,6 +236,8 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
         for (i, le) in e.layers.iter().enumerate() {
             let [out_dim, in_dim] = le.shape;
             ensure!([e.sizes[i + 1], e.sizes[i]] == le.shape, "{}: layer {} shape {:?} does not match sizes {:?}", ctx(), le.name, le.shape, e.sizes);
+            // The re-initialisation draws from U(-init_bound, init_bound).
+            ensure!(le.init_bound.is_finite() && le.init_bound > 0.0, "{}: layer {} has init_bound {}, expected a finite value > 0", ctx(), le.name, le.init_bound);
             let n = &le.name;
             let shape = [out_dim, in_dim];
             let states = model
