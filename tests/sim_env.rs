@@ -327,3 +327,20 @@ fn a_set_command_shows_in_the_newest_history_entry_too() {
     assert_eq!(&env.obs_history()[(HISTORY_LEN - 1) * OBS_DIM..], env.observation());
     assert_eq!(&env.obs_history()[..(HISTORY_LEN - 1) * OBS_DIM], &older[..], "older entries are what was observed");
 }
+
+#[test]
+fn config_values_that_would_panic_later_are_errors_naming_the_key() {
+    let cases = [
+        ("push_max_vel", EnvConfig { push_max_vel: -1.0, push_interval_s: 0.02, ..EnvConfig::default() }),
+        ("friction_range", EnvConfig { friction_range: [0.5, f32::INFINITY], ..EnvConfig::default() }),
+        ("tracking_sigma", EnvConfig { tracking_sigma: 0.0, ..EnvConfig::default() }),
+        ("soft_limit_fraction", EnvConfig { soft_limit_fraction: f32::NAN, ..EnvConfig::default() }),
+        ("push_interval_s", EnvConfig { push_interval_s: f32::NAN, ..EnvConfig::default() }),
+        ("added_mass", EnvConfig { added_mass_range: [-10.0, -10.0], ..EnvConfig::default() }),
+    ];
+    for (key, cfg) in cases {
+        let result = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).and_then(|mut env| env.step(&[0.0; ACT_DIM]));
+        let err = format!("{:#}", result.err().unwrap_or_else(|| panic!("{key}: accepted")));
+        assert!(err.contains(key), "{key}: {err}");
+    }
+}
