@@ -141,3 +141,12 @@ fn inconsistent_manifest_is_an_error_not_a_later_panic() {
         assert!(err.contains(MANIFEST_FILE) && err.contains(needle), "expected {needle:?}: {err}");
     }
 }
+
+#[test]
+fn saving_a_task_without_a_name_is_an_error_not_a_policy_that_cannot_load() {
+    let mut net = small_mlp(&MaskConfig::default(), 3);
+    net.begin_task(1, &[]).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let err = save_policy(dir.path(), &["none".into()], &[&net], &BTreeMap::new(), &serde_json::Value::Null).unwrap_err().to_string();
+    assert!(err.contains("task 1") && err.contains("no name"), "{err}");
+}

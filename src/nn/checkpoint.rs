@@ -136,6 +136,9 @@ pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras
             layers.push(LayerEntry { name: n.clone(), shape: [l.out_dim, l.in_dim], init_bound: l.init_bound });
         }
         let training = net.layers()[0].training.as_ref().map(|t| TrainingEntry { task: t.task, fine_tune: t.fine_tune, iteration: t.iteration });
+        if let Some(t) = &training {
+            ensure!(t.task < tasks.len(), "{}: task {} in progress has no name (only {} task names given)", net.name(), t.task, tasks.len());
+        }
         entries.push(NetworkEntry {
             name: net.name().to_string(),
             sizes: net.sizes().to_vec(),
