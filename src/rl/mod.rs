@@ -3,15 +3,28 @@
 //!
 //! | file | what |
 //! | --- | --- |
+//! | [`ppo`] | the PPO learner: rollout collection and the update, top to bottom |
+//! | [`agent`] | actor, critic, CENet encoder/decoder, policy std, observation statistics |
 //! | [`rollout`] | the rollout buffer of one iteration, GAE with time-out bootstrapping |
 //! | [`normalizer`] | running observation statistics, frozen when a task ends |
 //! | [`losses`] | the PPO loss pieces (Gaussian log-prob/entropy, clipped surrogate, value loss, KL, adaptive lr) |
 //! | [`cenet_loss`] | the CENet's output split, reparameterisation and beta-VAE loss |
+//! | [`env`] | the `TrainEnv` trait: what the learner needs from a batch of environments |
+//! | [`toy_env`] | a point-mass `TrainEnv` for fast tests of the loop |
+//! | [`scaffold`] | temporary dense stand-ins for the `nn` masked types |
 
+pub mod agent;
 pub mod cenet_loss;
+pub mod env;
 pub mod losses;
 pub mod normalizer;
+pub mod ppo;
 pub mod rollout;
+pub mod scaffold;
+pub mod toy_env;
 
+pub use agent::Agent;
+pub use env::{EnvDims, EnvStep, FinishedEpisode, TrainEnv};
 pub use normalizer::RunningNormalizer;
+pub use ppo::{Metrics, PpoLearner};
 pub use rollout::{gae, RolloutBuffer, RolloutDims, StepRecord};

@@ -10,6 +10,7 @@
 //! | `obs` | (T, N, obs_dim), normalised |
 //! | `privileged_obs` | (T, N, priv_obs_dim), normalised |
 //! | `obs_history` | (T, N, history_dim), normalised, oldest first |
+//! | `context` | (T, N, context), the CENet estimate (velocity, latent sample) the actor saw |
 //! | `next_obs` | (T, N, obs_dim), normalised obs reached by the step (before auto-reset) |
 //! | `base_velocity` | (T, N, 3), the CENet's velocity target |
 //! | `actions`, `action_means` | (T, N, act_dim) |
@@ -36,6 +37,8 @@ pub struct RolloutDims {
     pub obs_history: usize,
     /// Action width (12).
     pub act: usize,
+    /// Width of the CENet context the actor sees besides the observation (3 + latent, or 0).
+    pub context: usize,
 }
 
 /// One iteration's transitions; see the module doc for the layout.
@@ -49,6 +52,7 @@ pub struct RolloutBuffer {
     pub obs: Vec<f32>,
     pub privileged_obs: Vec<f32>,
     pub obs_history: Vec<f32>,
+    pub context: Vec<f32>,
     pub next_obs: Vec<f32>,
     pub base_velocity: Vec<f32>,
     pub actions: Vec<f32>,
@@ -71,6 +75,7 @@ pub struct StepRecord<'a> {
     pub obs: &'a [f32],
     pub privileged_obs: &'a [f32],
     pub obs_history: &'a [f32],
+    pub context: &'a [f32],
     pub next_obs: &'a [f32],
     pub base_velocity: &'a [f32],
     pub actions: &'a [f32],
@@ -94,6 +99,7 @@ impl RolloutBuffer {
             obs: Vec::with_capacity(rows * dims.obs),
             privileged_obs: Vec::with_capacity(rows * dims.privileged_obs),
             obs_history: Vec::with_capacity(rows * dims.obs_history),
+            context: Vec::with_capacity(rows * dims.context),
             next_obs: Vec::with_capacity(rows * dims.obs),
             base_velocity: Vec::with_capacity(rows * 3),
             actions: Vec::with_capacity(rows * dims.act),
@@ -120,6 +126,7 @@ impl RolloutBuffer {
             &mut self.obs,
             &mut self.privileged_obs,
             &mut self.obs_history,
+            &mut self.context,
             &mut self.next_obs,
             &mut self.base_velocity,
             &mut self.actions,
@@ -149,6 +156,7 @@ impl RolloutBuffer {
         check("obs", step.obs.len(), d.obs)?;
         check("privileged_obs", step.privileged_obs.len(), d.privileged_obs)?;
         check("obs_history", step.obs_history.len(), d.obs_history)?;
+        check("context", step.context.len(), d.context)?;
         check("next_obs", step.next_obs.len(), d.obs)?;
         check("base_velocity", step.base_velocity.len(), 3)?;
         check("actions", step.actions.len(), d.act)?;
@@ -161,6 +169,7 @@ impl RolloutBuffer {
         self.obs.extend_from_slice(step.obs);
         self.privileged_obs.extend_from_slice(step.privileged_obs);
         self.obs_history.extend_from_slice(step.obs_history);
+        self.context.extend_from_slice(step.context);
         self.next_obs.extend_from_slice(step.next_obs);
         self.base_velocity.extend_from_slice(step.base_velocity);
         self.actions.extend_from_slice(step.actions);
@@ -341,7 +350,7 @@ mod tests {
 
     #[test]
     fn push_rejects_a_field_of_the_wrong_width_by_name() {
-        let dims = RolloutDims { obs: 2, privileged_obs: 3, obs_history: 4, act: 1 };
+        let dims = RolloutDims { obs: 2, privileged_obs: 3, obs_history: 4, act: 1, context: 2 };
         let mut buf = RolloutBuffer::new(dims, 1, 1);
         let z = [0.0f32; 8];
         let b = [false];
@@ -349,6 +358,7 @@ mod tests {
             obs: &z[..2],
             privileged_obs: &z[..3],
             obs_history: &z[..4],
+            context: &z[..2],
             next_obs: &z[..2],
             base_velocity: &z[..3],
             actions: &z[..1],
