@@ -26,6 +26,8 @@ pub struct EnvDims {
 /// An episode that ended during a step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FinishedEpisode {
+    /// Which member of the batch it was.
+    pub env_index: usize,
     /// Sum of the (dt-scaled) rewards.
     pub episode_return: f64,
     /// Simulated seconds survived.

@@ -133,6 +133,7 @@ impl TrainEnv for ToyEnv {
             out.truncated[e] = self.steps[e] >= self.episode_steps;
             if out.terminated[e] || out.truncated[e] {
                 out.finished.push(FinishedEpisode {
+                    env_index: e,
                     episode_return: self.episode_return[e],
                     length_s: self.steps[e] as f64 * f64::from(DT),
                     lin_vel_err: self.episode_err[e] / self.steps[e] as f64,
