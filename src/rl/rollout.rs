@@ -230,9 +230,9 @@ pub fn gae(
     anyhow::ensure!(last_values.len() == num_envs, "GAE: last_values has {} entries, expected {num_envs}", last_values.len());
     let num_steps = rows / num_envs;
     let mut advantages = vec![0.0f32; rows];
-    for e in 0..num_envs {
+    for (e, &last_value) in last_values.iter().enumerate() {
         let mut next_advantage = 0.0f32;
-        let mut next_value = last_values[e];
+        let mut next_value = last_value;
         for t in (0..num_steps).rev() {
             let i = t * num_envs + e;
             let bootstrap = truncated[i] && !terminated[i];

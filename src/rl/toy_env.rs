@@ -117,8 +117,8 @@ impl TrainEnv for ToyEnv {
             next_obs_before_reset: vec![0.0; n * 3],
             finished: Vec::new(),
         };
-        for e in 0..n {
-            let a = actions[e].clamp(-3.0, 3.0);
+        for (e, &action) in actions.iter().enumerate() {
+            let a = action.clamp(-3.0, 3.0);
             self.x[e] += a * DT;
             self.prev_action[e] = a;
             self.steps[e] += 1;
