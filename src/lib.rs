@@ -10,12 +10,14 @@
 //! | [`sim`] | the Rapier quadruped: URDF loading, PD motors, `LocomotionEnv`, task perturbations, a parallel batch of envs | `config` |
 //! | [`nn`] | masked networks in candle: `MaskedLinear`, `MaskedMlp`, the masked Adam, checkpoints | `config` |
 //! | [`rl`] | PPO with a privileged critic and a context estimator (CENet), rollouts, GAE, observation normalisation | `config`, `sim`, `nn` |
+//! | [`cl`] | continual learning around the learner: sequences, the continual measures | `config`, `sim`, `nn`, `rl` |
 //! | [`bench`] | the throughput figures printed by `quadcl bench` | everything |
 //! | [`cmd`] | one file per CLI subcommand, thin glue over the modules above | everything |
 //!
 //! `sim` never imports `nn`; `nn` never imports `sim`.
 
 pub mod bench;
+pub mod cl;
 pub mod cli;
 pub mod cmd;
 pub mod config;

@@ -1,6 +1,94 @@
-//! Environment throughput (owned by the `sim` work; skeleton).
+//! Environment throughput for `quadcl bench`: control (policy) steps per
+//! second of the default A1 env, one env on one thread and a batch of 64 on
+//! all rayon threads. Actions are a trotting-like sine on thighs and calves
+//! plus noise (walking-like contacts, not a robot standing still); episodes
+//! reset as they end, and the resets are part of the time.
+//!
+//! Keys: `env_control_steps_per_s_1t`, `env_control_steps_per_s_all`,
+//! `env_batch`, `threads`, `physics_dt`, `decimation`, `solver_iterations`,
+//! `env_physics_steps_per_s_1t`, and `env_control_steps_per_s_1t_dt0005_x4`
+//! (one env at MuJoCo's reference step 0.005 s x 4, to compare like with like).
+
+use crate::config::EnvConfig;
+use crate::sim::{LocomotionEnv, Perturbation, RobotModel, VecEnv, ACT_DIM};
+use rand::{Rng, SeedableRng};
+use serde_json::json;
+use std::time::Instant;
+
+/// Envs in the all-threads batch.
+const BATCH: usize = 64;
+/// Distinct action rows cycled through (precomputed so drawing them costs nothing).
+const ACTION_ROWS: usize = 256;
+
+/// Walking-like actions: (ACTION_ROWS, ACT_DIM), 2 Hz trot at 50 Hz plus noise.
+fn gait_actions(policy_dt: f32) -> Vec<f32> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+    let mut out = Vec::with_capacity(ACTION_ROWS * ACT_DIM);
+    for k in 0..ACTION_ROWS {
+        let phase = k as f32 * policy_dt * 2.0 * std::f32::consts::TAU;
+        for j in 0..ACT_DIM {
+            let leg = j / 3;
+            let diagonal = if leg == 0 || leg == 3 { 1.0 } else { -1.0 };
+            let swing = if j % 3 == 0 { 0.0 } else { diagonal * phase.sin() };
+            out.push(swing + 0.3 * rng.gen_range(-1.0f32..1.0));
+        }
+    }
+    out
+}
+
+/// Control steps per second of one env on this thread for `seconds`.
+fn one_env_rate(cfg: &EnvConfig, robot: &RobotModel, actions: &[f32], seconds: f64) -> anyhow::Result<f64> {
+    let mut env = LocomotionEnv::new(cfg, robot, &Perturbation::none())?;
+    let start = Instant::now();
+    let mut steps = 0usize;
+    while start.elapsed().as_secs_f64() < seconds {
+        for _ in 0..50 {
+            let row = steps % ACTION_ROWS;
+            let step = env.step(&actions[row * ACT_DIM..(row + 1) * ACT_DIM])?;
+            if step.terminated || step.truncated {
+                env.reset_episode()?;
+            }
+            steps += 1;
+        }
+    }
+    Ok(steps as f64 / start.elapsed().as_secs_f64())
+}
 
 /// Adds the environment figures to `report`.
-pub fn measure(_seconds: f64, _report: &mut serde_json::Map<String, serde_json::Value>) -> anyhow::Result<()> {
+pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Value>) -> anyhow::Result<()> {
+    let cfg = EnvConfig::default();
+    let robot = RobotModel::a1()?;
+    let task = Perturbation::none();
+    let actions = gait_actions(cfg.policy_dt());
+
+    let one = one_env_rate(&cfg, &robot, &actions, seconds)?;
+    // The same at MuJoCo's reference setting (0.005 s x 4), for the ratio in the README.
+    let reference = EnvConfig { physics_dt: 0.005, decimation: 4, ..cfg.clone() };
+    let one_reference = one_env_rate(&reference, &robot, &actions, seconds)?;
+
+    // A batch on all threads.
+    let mut batch = VecEnv::new(&cfg, &robot, &task, BATCH, 1)?;
+    let mut batch_actions = vec![0.0f32; BATCH * ACT_DIM];
+    let start = Instant::now();
+    let mut batch_steps = 0usize;
+    while start.elapsed().as_secs_f64() < seconds {
+        for (i, row) in batch_actions.chunks_mut(ACT_DIM).enumerate() {
+            let r = (batch_steps + 7 * i) % ACTION_ROWS;
+            row.copy_from_slice(&actions[r * ACT_DIM..(r + 1) * ACT_DIM]);
+        }
+        batch.step(&batch_actions)?;
+        batch_steps += 1;
+    }
+    let all = (batch_steps * BATCH) as f64 / start.elapsed().as_secs_f64();
+
+    report.insert("env_control_steps_per_s_1t".into(), json!(one.round()));
+    report.insert("env_control_steps_per_s_all".into(), json!(all.round()));
+    report.insert("env_physics_steps_per_s_1t".into(), json!((one * cfg.decimation as f64).round()));
+    report.insert("env_control_steps_per_s_1t_dt0005_x4".into(), json!(one_reference.round()));
+    report.insert("env_batch".into(), json!(BATCH));
+    report.insert("threads".into(), json!(rayon::current_num_threads()));
+    report.insert("physics_dt".into(), json!((cfg.physics_dt as f64 * 1e6).round() / 1e6));
+    report.insert("decimation".into(), json!(cfg.decimation));
+    report.insert("solver_iterations".into(), json!(cfg.solver_iterations));
     Ok(())
 }

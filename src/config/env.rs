@@ -1,8 +1,200 @@
-//! Settings of the simulated robot (owned by the `sim` work; skeleton).
+//! Settings of the simulated robot: physics step, PD control, commands,
+//! episode limits, domain randomisation, task perturbation noise and the
+//! reward weights of the paper's Table 1 (DESIGN.md, "The environment").
+//!
+//! Every field has a default; a TOML `[env]` table only names what it changes.
 
 use serde::{Deserialize, Serialize};
 
 /// The simulated robot, its control, rewards and randomisation.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct EnvConfig {}
+pub struct EnvConfig {
+    /// Robot description, relative to the crate root (or absolute).
+    pub urdf: String,
+    /// Physics step in seconds. Chosen by measurement (README, "Simulator"):
+    /// with the PD law implicit in rapier's multibody dynamics, 0.01 s stands
+    /// and moves like 0.005 s (height, tracking, falls) at twice the speed;
+    /// 0.02 s lets feet sink up to 6 cm and changes how the robot falls.
+    pub physics_dt: f32,
+    /// Physics steps per policy step; policy rate = 1 / (physics_dt * decimation) = 50 Hz.
+    pub decimation: usize,
+    /// Constraint-solver iterations per physics step (rapier's `num_solver_iterations`).
+    /// The PD motors do not go through the solver (implicit joint springs and
+    /// damping), so one iteration (contacts and limits only) is enough; each
+    /// extra one costs about as much as the rest of the step.
+    pub solver_iterations: usize,
+    /// Proportional gain of the joint PD motors, N m / rad.
+    pub kp: f32,
+    /// Derivative gain of the joint PD motors, N m s / rad.
+    pub kd: f32,
+    /// Joint target = default pose + action_scale * action.
+    pub action_scale: f32,
+    /// Actions are clipped to [-clip_actions, clip_actions] before use.
+    pub clip_actions: f32,
+    /// Trunk height at reset, metres.
+    pub start_height: f32,
+    /// Default (standing) joint angles, rad, in the order hip, thigh, calf
+    /// for the front-left leg; the other legs mirror it (right hips negated).
+    pub default_hip_left: f32,
+    /// Default hip angle of the right legs (FR, RR), rad.
+    pub default_hip_right: f32,
+    /// Default thigh angle of the front legs, rad.
+    pub default_thigh_front: f32,
+    /// Default thigh angle of the rear legs, rad.
+    pub default_thigh_rear: f32,
+    /// Default calf angle of every leg, rad.
+    pub default_calf: f32,
+    /// Episode length, seconds (time-out => truncated).
+    pub episode_s: f32,
+    /// Commands are resampled every this many seconds.
+    pub command_resample_s: f32,
+    /// Forward velocity command range, m/s.
+    pub cmd_vx: [f32; 2],
+    /// Lateral velocity command range, m/s.
+    pub cmd_vy: [f32; 2],
+    /// Yaw rate command range, rad/s.
+    pub cmd_wz: [f32; 2],
+    /// Terminate when the trunk's up axis tilts more than this from vertical, rad.
+    pub max_tilt_rad: f32,
+    /// Ground friction coefficient range (uniform), randomised per episode.
+    pub friction_range: [f32; 2],
+    /// Mass added to the trunk, kg (uniform), randomised per episode.
+    pub added_mass_range: [f32; 2],
+    /// Motor strength factor (gains and effort limits), randomised per episode.
+    pub motor_strength_range: [f32; 2],
+    /// Whether friction, added mass and motor strength are randomised at all.
+    pub randomize: bool,
+    /// A push (a change of the trunk's horizontal velocity) every this many seconds; 0 disables.
+    pub push_interval_s: f32,
+    /// Largest horizontal velocity change of a push, m/s (uniform per axis).
+    pub push_max_vel: f32,
+    /// Standard deviation of the Gaussian added to a `noise` leg's actions (action units).
+    pub noise_std: f32,
+    /// Soft joint limits: this fraction of each joint's range, centred.
+    pub soft_limit_fraction: f32,
+    /// Tracking reward width sigma: exp(-err^2 / sigma).
+    pub tracking_sigma: f32,
+    /// Body height target, metres.
+    pub height_target: f32,
+    /// Feet clearance target height, metres.
+    pub feet_height_target: f32,
+    /// Named weights of the Table 1 reward terms (each also times the policy dt).
+    pub rewards: RewardWeights,
+}
+
+/// Weights of the paper's Table 1 reward terms. A term's reward is
+/// weight * value * policy dt.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RewardWeights {
+    /// exp(-|v_xy - v_xy_cmd|^2 / sigma)
+    pub lin_vel_tracking: f32,
+    /// exp(-(w_z - w_z_cmd)^2 / sigma)
+    pub ang_vel_tracking: f32,
+    /// v_z^2
+    pub lin_vel_z: f32,
+    /// |w_xy|^2
+    pub ang_vel_xy: f32,
+    /// |g_xy|^2 (projected gravity)
+    pub orientation: f32,
+    /// sum of distances outside the soft joint limits
+    pub joint_limits: f32,
+    /// |tau|^2
+    pub torques: f32,
+    /// |qdd|^2
+    pub joint_acc: f32,
+    /// (h - h_target)^2
+    pub body_height: f32,
+    /// sum over feet of (p_z - p_target)^2 * |v_foot_xy|
+    pub feet_clearance: f32,
+    /// count of thigh/calf contacts with the ground
+    pub collision: f32,
+    /// |a_(t-1) - a_t|^2
+    pub action_rate: f32,
+}
+
+impl Default for RewardWeights {
+    fn default() -> Self {
+        Self {
+            lin_vel_tracking: 1.0,
+            ang_vel_tracking: 0.5,
+            lin_vel_z: -2.0,
+            ang_vel_xy: -0.05,
+            orientation: -5.0,
+            joint_limits: -10.0,
+            torques: -2e-4,
+            joint_acc: -2.5e-7,
+            body_height: -30.0,
+            feet_clearance: -1.0,
+            collision: -1.0,
+            action_rate: -0.01,
+        }
+    }
+}
+
+impl Default for EnvConfig {
+    fn default() -> Self {
+        Self {
+            urdf: "scenes/a1.urdf".into(),
+            physics_dt: 0.01,
+            decimation: 2,
+            solver_iterations: 1,
+            kp: 20.0,
+            kd: 0.5,
+            action_scale: 0.25,
+            clip_actions: 10.0,
+            start_height: 0.42,
+            default_hip_left: 0.1,
+            default_hip_right: -0.1,
+            default_thigh_front: 0.8,
+            default_thigh_rear: 1.0,
+            default_calf: -1.5,
+            episode_s: 20.0,
+            command_resample_s: 10.0,
+            cmd_vx: [-1.0, 1.0],
+            cmd_vy: [0.0, 0.0],
+            cmd_wz: [-std::f32::consts::FRAC_PI_2, std::f32::consts::FRAC_PI_2],
+            max_tilt_rad: 1.0,
+            friction_range: [0.5, 1.25],
+            added_mass_range: [-1.0, 1.0],
+            motor_strength_range: [0.9, 1.1],
+            randomize: true,
+            push_interval_s: 15.0,
+            push_max_vel: 1.0,
+            noise_std: 0.5,
+            soft_limit_fraction: 0.9,
+            tracking_sigma: 0.25,
+            height_target: 0.30,
+            feet_height_target: 0.08,
+            rewards: RewardWeights::default(),
+        }
+    }
+}
+
+impl EnvConfig {
+    /// Seconds per policy step (physics_dt * decimation).
+    pub fn policy_dt(&self) -> f32 {
+        self.physics_dt * self.decimation as f32
+    }
+
+    /// Checks the values that would make the simulation meaningless.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        anyhow::ensure!(self.physics_dt > 0.0 && self.physics_dt.is_finite(), "env.physics_dt must be > 0, got {}", self.physics_dt);
+        anyhow::ensure!(self.decimation >= 1, "env.decimation must be >= 1, got {}", self.decimation);
+        anyhow::ensure!(self.solver_iterations >= 1, "env.solver_iterations must be >= 1");
+        anyhow::ensure!(self.episode_s > 0.0, "env.episode_s must be > 0, got {}", self.episode_s);
+        for (name, r) in [
+            ("cmd_vx", self.cmd_vx),
+            ("cmd_vy", self.cmd_vy),
+            ("cmd_wz", self.cmd_wz),
+            ("friction_range", self.friction_range),
+            ("added_mass_range", self.added_mass_range),
+            ("motor_strength_range", self.motor_strength_range),
+        ] {
+            anyhow::ensure!(r[0] <= r[1], "env.{name} must be [low, high] with low <= high, got {r:?}");
+        }
+        anyhow::ensure!(self.noise_std >= 0.0, "env.noise_std must be >= 0");
+        Ok(())
+    }
+}

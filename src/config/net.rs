@@ -1,8 +1,156 @@
-//! Settings of the masked networks (owned by the `nn` work; skeleton).
+//! Settings of the masked networks (METHOD.md section 2): network sizes and
+//! activation per network, and the mask settings of the method.
 
 use serde::{Deserialize, Serialize};
 
-/// Network sizes and the masked-network settings of the method.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+/// The activation between hidden layers of a [`crate::nn::MaskedMlp`]
+/// (the output layer is always linear).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Activation {
+    /// ELU with alpha = 1 (the paper's choice).
+    #[default]
+    Elu,
+    /// max(x, 0).
+    Relu,
+    /// tanh(x).
+    Tanh,
+    /// No activation.
+    Identity,
+}
+
+/// How a layer's mask is chosen from the soft scores (METHOD.md 2.1 and its ablation variants).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SelectionRule {
+    /// Per row: round(lambda*k) from vacant elements, the rest from occupied ones, filled from the other group when one runs short.
+    #[default]
+    Split,
+    /// Per row: one top-k over vacant and occupied together (WSN-like).
+    Free,
+    /// Per row: top-k over vacant elements only (fewer if there are not enough).
+    Vacant,
+    /// One top-k over the whole layer (WSN's original rule).
+    PerLayer,
+}
+
+/// The masked-layer settings of the method (METHOD.md 2.1 to 2.6).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct NetConfig {}
+pub struct MaskConfig {
+    /// Capacity ratio c: the fraction of each row (or layer, for `per-layer`) a task selects.
+    pub capacity: f64,
+    /// Vacant share lambda: the fraction of a row's selection taken from vacant elements.
+    pub vacant_share: f64,
+    /// Private share p: the fraction of the layer's elements made private to a task at its end.
+    pub private_share: f64,
+    /// Selection rule: "split" (the method), "free", "vacant" or "per-layer".
+    pub rule: SelectionRule,
+    /// Standard deviation of the initial soft-score means (Gaussian around 0).
+    pub score_init_std: f64,
+    /// Initial soft-score sigma (one per layer) at the start of every task.
+    pub sigma_init: f64,
+    /// Whether the entropy term -beta_H * H on sigma is used (METHOD.md 2.3).
+    pub entropy: bool,
+    /// beta_H, the weight of the entropy term.
+    pub entropy_weight: f64,
+    /// E: the number of iterations of each task during which the entropy term is on.
+    pub entropy_iterations: usize,
+    /// Multiplicative decay of sigma per iteration after E iterations.
+    pub sigma_decay: f64,
+    /// Lower bound of sigma.
+    pub sigma_floor: f64,
+    /// Upper bound of sigma: Adam moves the one sigma per layer by about the learning rate per
+    /// step whatever beta_H is, so without a bound the entropy term would drown the scores' ranking.
+    pub sigma_max: f64,
+    /// Re-initialise vacant weights and redraw soft-score means at the end of each task (METHOD.md 2.4).
+    pub reinit: bool,
+    /// Forward-transfer bonus on related tasks' elements, in units of `score_init_std` (METHOD.md 2.6).
+    pub transfer_bonus: f64,
+}
+
+impl Default for MaskConfig {
+    fn default() -> Self {
+        Self {
+            capacity: 0.2,
+            vacant_share: 0.25,
+            private_share: 0.02,
+            rule: SelectionRule::Split,
+            score_init_std: 0.01,
+            sigma_init: 0.005,
+            entropy: true,
+            entropy_weight: 1e-4,
+            entropy_iterations: 100,
+            sigma_decay: 0.99,
+            sigma_floor: 1e-3,
+            sigma_max: 0.05,
+            reinit: true,
+            transfer_bonus: 3.0,
+        }
+    }
+}
+
+impl MaskConfig {
+    /// Checks the ranges of every field; the error names the key and the expected range.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        let in_unit = |name: &str, v: f64| -> anyhow::Result<()> {
+            anyhow::ensure!((0.0..=1.0).contains(&v), "net.mask.{name} = {v}: expected a value in [0, 1]");
+            Ok(())
+        };
+        in_unit("capacity", self.capacity)?;
+        in_unit("vacant_share", self.vacant_share)?;
+        in_unit("private_share", self.private_share)?;
+        in_unit("sigma_decay", self.sigma_decay)?;
+        anyhow::ensure!(self.score_init_std > 0.0, "net.mask.score_init_std must be > 0");
+        anyhow::ensure!(self.sigma_init >= 0.0 && self.sigma_floor >= 0.0, "net.mask.sigma_init and sigma_floor must be >= 0");
+        anyhow::ensure!(self.sigma_max >= self.sigma_floor, "net.mask.sigma_max ({}) must be >= sigma_floor ({})", self.sigma_max, self.sigma_floor);
+        Ok(())
+    }
+}
+
+/// Sizes and activation of one network.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MlpConfig {
+    /// Hidden layer widths, input to output.
+    pub hidden: Vec<usize>,
+    /// Activation between hidden layers.
+    pub activation: Activation,
+}
+
+impl Default for MlpConfig {
+    fn default() -> Self {
+        Self::paper(&[512, 256, 128])
+    }
+}
+
+impl MlpConfig {
+    fn paper(hidden: &[usize]) -> Self {
+        Self { hidden: hidden.to_vec(), activation: Activation::Elu }
+    }
+}
+
+/// Network sizes and the masked-network settings of the method.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NetConfig {
+    /// The actor (policy mean): 512-256-128 ELU as in the paper.
+    pub actor: MlpConfig,
+    /// The critic (privileged value function).
+    pub critic: MlpConfig,
+    /// The context estimator's encoder (CENet).
+    pub cenet: MlpConfig,
+    /// Mask settings shared by every masked network.
+    pub mask: MaskConfig,
+}
+
+impl Default for NetConfig {
+    fn default() -> Self {
+        Self {
+            actor: MlpConfig::paper(&[512, 256, 128]),
+            critic: MlpConfig::paper(&[512, 256, 128]),
+            cenet: MlpConfig::paper(&[256, 128]),
+            mask: MaskConfig::default(),
+        }
+    }
+}

@@ -1,0 +1,288 @@
+//! Policy directories: everything needed to recall every task exactly and to
+//! go on training (METHOD.md 2.4, 2.5).
+//!
+//! - `model.safetensors`: per layer "{layer}.weight" f32 (out, in),
+//!   "{layer}.score" f32 (out, in) (soft-score means), "{layer}.sigma" f32 (1,),
+//!   "{layer}.state" u32 (out, in) (0 vacant, 1 occupied, 2 + t private to t),
+//!   "{layer}.bias.{t}" f32 (out,) per finished task, "{layer}.bias.current"
+//!   while a task is in progress; extras as "extra.{name}" f32 (any shape);
+//! - `masks.safetensors`: "{layer}.mask.{t}" u8 (ceil(out*in/8),), bit-packed row-major;
+//! - `manifest.json`: format version, task names, networks (sizes, activation,
+//!   mask settings, layer shapes, task in progress), the run's config, and
+//!   the sha256 of both tensor files.
+//!
+//! Every write is atomic; loading checks version, hashes, dtypes and shapes,
+//! and reports a corrupt or mismatched file as an error naming it.
+
+use super::bitmask::BitMask;
+use super::masked::{var_values, MaskedLinear, Training};
+use super::mlp::MaskedMlp;
+use super::state::{ElementState, TaskId};
+use crate::config::net::{Activation, MaskConfig};
+use crate::util::{sha256_hex, write_atomic};
+use anyhow::{bail, ensure, Context};
+use candle_core::{Device, Tensor, Var};
+use safetensors::{Dtype, SafeTensors};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Bumped whenever the layout of a policy directory changes.
+pub const FORMAT_VERSION: u32 = 1;
+pub const MODEL_FILE: &str = "model.safetensors";
+pub const MASKS_FILE: &str = "masks.safetensors";
+pub const MANIFEST_FILE: &str = "manifest.json";
+
+/// A loaded policy directory.
+#[derive(Debug)]
+pub struct Policy {
+    /// Task names; a [`TaskId`] indexes this list.
+    pub tasks: Vec<String>,
+    pub networks: Vec<MaskedMlp>,
+    /// Named f32 tensors (per-task action std, normaliser statistics, ...).
+    pub extras: BTreeMap<String, Tensor>,
+    /// The run's configuration, as given to [`save_policy`].
+    pub config: serde_json::Value,
+}
+
+impl Policy {
+    /// The network called `name`.
+    pub fn network(&self, name: &str) -> anyhow::Result<&MaskedMlp> {
+        self.networks.iter().find(|n| n.name() == name).with_context(|| format!("policy has no network {name:?}"))
+    }
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+struct Manifest {
+    format_version: u32,
+    tasks: Vec<String>,
+    networks: Vec<NetworkEntry>,
+    extras: Vec<String>,
+    config: serde_json::Value,
+    files: BTreeMap<String, String>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+struct NetworkEntry {
+    name: String,
+    sizes: Vec<usize>,
+    activation: Activation,
+    mask: MaskConfig,
+    finish_order: Vec<TaskId>,
+    training: Option<TrainingEntry>,
+    layers: Vec<LayerEntry>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+struct TrainingEntry {
+    task: TaskId,
+    fine_tune: bool,
+    iteration: usize,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+struct LayerEntry {
+    name: String,
+    shape: [usize; 2],
+    init_bound: f32,
+}
+
+struct Raw {
+    dtype: Dtype,
+    shape: Vec<usize>,
+    bytes: Vec<u8>,
+}
+
+fn f32_raw(values: &[f32], shape: Vec<usize>) -> Raw {
+    Raw { dtype: Dtype::F32, shape, bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect() }
+}
+
+fn serialize(tensors: &BTreeMap<String, Raw>) -> anyhow::Result<Vec<u8>> {
+    let views = tensors
+        .iter()
+        .map(|(k, r)| Ok((k.clone(), safetensors::tensor::TensorView::new(r.dtype, r.shape.clone(), &r.bytes)?)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    Ok(safetensors::serialize(views, None)?)
+}
+
+/// Writes a policy directory (creating it). `tasks` names every TaskId the networks use.
+pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras: &BTreeMap<String, Tensor>, config: &serde_json::Value) -> anyhow::Result<()> {
+    let mut model = BTreeMap::new();
+    let mut masks = BTreeMap::new();
+    let mut entries = Vec::new();
+    for net in networks {
+        let mut layers = Vec::new();
+        for l in net.layers() {
+            let n = &l.name;
+            let shape = vec![l.out_dim, l.in_dim];
+            model.insert(format!("{n}.weight"), f32_raw(&var_values(&l.weight)?, shape.clone()));
+            model.insert(format!("{n}.score"), f32_raw(&var_values(&l.score_mean)?, shape.clone()));
+            model.insert(format!("{n}.sigma"), f32_raw(&var_values(&l.sigma)?, vec![1]));
+            let states: Vec<u8> = l.states.iter().flat_map(|s| s.to_code().to_le_bytes()).collect();
+            model.insert(format!("{n}.state"), Raw { dtype: Dtype::U32, shape: shape.clone(), bytes: states });
+            for (t, b) in &l.biases {
+                ensure!(*t < tasks.len(), "{n}: task {t} has no name (only {} task names given)", tasks.len());
+                model.insert(format!("{n}.bias.{t}"), f32_raw(b, vec![l.out_dim]));
+            }
+            if let Some(tr) = &l.training {
+                model.insert(format!("{n}.bias.current"), f32_raw(&var_values(&tr.bias)?, vec![l.out_dim]));
+            }
+            for (t, m) in &l.masks {
+                masks.insert(format!("{n}.mask.{t}"), Raw { dtype: Dtype::U8, shape: vec![m.as_bytes().len()], bytes: m.as_bytes().to_vec() });
+            }
+            layers.push(LayerEntry { name: n.clone(), shape: [l.out_dim, l.in_dim], init_bound: l.init_bound });
+        }
+        let training = net.layers()[0].training.as_ref().map(|t| TrainingEntry { task: t.task, fine_tune: t.fine_tune, iteration: t.iteration });
+        entries.push(NetworkEntry {
+            name: net.name().to_string(),
+            sizes: net.sizes().to_vec(),
+            activation: net.activation(),
+            mask: net.mask_config().clone(),
+            finish_order: net.finished_tasks().to_vec(),
+            training,
+            layers,
+        });
+    }
+    for (name, t) in extras {
+        let v = t.flatten_all()?.to_dtype(candle_core::DType::F32)?.to_vec1::<f32>()?;
+        model.insert(format!("extra.{name}"), f32_raw(&v, t.dims().to_vec()));
+    }
+    let model_bytes = serialize(&model)?;
+    let mask_bytes = serialize(&masks)?;
+    let files = BTreeMap::from([(MODEL_FILE.to_string(), sha256_hex(&model_bytes)), (MASKS_FILE.to_string(), sha256_hex(&mask_bytes))]);
+    let manifest = Manifest { format_version: FORMAT_VERSION, tasks: tasks.to_vec(), networks: entries, extras: extras.keys().cloned().collect(), config: config.clone(), files };
+    write_atomic(&dir.join(MODEL_FILE), &model_bytes)?;
+    write_atomic(&dir.join(MASKS_FILE), &mask_bytes)?;
+    // The manifest goes last: it names the hashes of the files written before it.
+    write_atomic(&dir.join(MANIFEST_FILE), serde_json::to_string_pretty(&manifest)?.as_bytes())
+}
+
+/// Reads one tensor file and checks its hash against the manifest.
+fn read_checked(dir: &Path, file: &str, manifest: &Manifest) -> anyhow::Result<Vec<u8>> {
+    let path = dir.join(file);
+    let bytes = std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?;
+    let want = manifest.files.get(file).with_context(|| format!("{}: manifest lists no hash for {file}", dir.join(MANIFEST_FILE).display()))?;
+    let got = sha256_hex(&bytes);
+    ensure!(&got == want, "{}: content hash mismatch (manifest {want}, file {got}): the file is corrupt or from another policy", path.display());
+    Ok(bytes)
+}
+
+struct Reader<'a> {
+    file: String,
+    st: SafeTensors<'a>,
+}
+
+impl<'a> Reader<'a> {
+    fn new(file: &Path, bytes: &'a [u8]) -> anyhow::Result<Self> {
+        let st = SafeTensors::deserialize(bytes).map_err(|e| anyhow::anyhow!("{}: not a valid safetensors file: {e:?}", file.display()))?;
+        Ok(Self { file: file.display().to_string(), st })
+    }
+
+    fn raw(&self, name: &str, dtype: Dtype, shape: &[usize]) -> anyhow::Result<&'a [u8]> {
+        let t = self.st.tensor(name).map_err(|_| anyhow::anyhow!("{}: missing tensor {name}", self.file))?;
+        ensure!(t.dtype() == dtype, "{}: tensor {name} has dtype {:?}, expected {dtype:?}", self.file, t.dtype());
+        ensure!(t.shape() == shape, "{}: tensor {name} has shape {:?}, expected {shape:?}", self.file, t.shape());
+        Ok(t.data())
+    }
+
+    fn f32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f32>> {
+        Ok(self.raw(name, Dtype::F32, shape)?.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    }
+
+    fn u32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u32>> {
+        Ok(self.raw(name, Dtype::U32, shape)?.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    }
+
+    fn shape_of(&self, name: &str) -> anyhow::Result<Vec<usize>> {
+        Ok(self.st.tensor(name).map_err(|_| anyhow::anyhow!("{}: missing tensor {name}", self.file))?.shape().to_vec())
+    }
+}
+
+fn var(values: Vec<f32>, shape: &[usize]) -> anyhow::Result<Var> {
+    Ok(Var::from_tensor(&Tensor::from_vec(values, shape, &Device::Cpu)?)?)
+}
+
+/// Loads a policy directory written by [`save_policy`].
+pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
+    let manifest_path = dir.join(MANIFEST_FILE);
+    let text = std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
+    let manifest: Manifest = serde_json::from_str(&text).with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
+    ensure!(manifest.format_version == FORMAT_VERSION, "{}: format version {} is not supported (this build reads {FORMAT_VERSION})", manifest_path.display(), manifest.format_version);
+    let model_bytes = read_checked(dir, MODEL_FILE, &manifest)?;
+    let mask_bytes = read_checked(dir, MASKS_FILE, &manifest)?;
+    let model = Reader::new(&dir.join(MODEL_FILE), &model_bytes)?;
+    let mask_file = Reader::new(&dir.join(MASKS_FILE), &mask_bytes)?;
+    let n_tasks = manifest.tasks.len();
+    let mut networks = Vec::new();
+    for e in &manifest.networks {
+        let ctx = || format!("{}: network {}", manifest_path.display(), e.name);
+        e.mask.validate().with_context(ctx)?;
+        ensure!(e.sizes.len() == e.layers.len() + 1, "{}: {} sizes for {} layers", ctx(), e.sizes.len(), e.layers.len());
+        ensure!(e.finish_order.iter().all(|t| *t < n_tasks), "{}: a finished task id is out of range of the {n_tasks} tasks", ctx());
+        let mut layers = Vec::new();
+        for (i, le) in e.layers.iter().enumerate() {
+            let [out_dim, in_dim] = le.shape;
+            ensure!([e.sizes[i + 1], e.sizes[i]] == le.shape, "{}: layer {} shape {:?} does not match sizes {:?}", ctx(), le.name, le.shape, e.sizes);
+            let n = &le.name;
+            let shape = [out_dim, in_dim];
+            let states = model
+                .u32s(&format!("{n}.state"), &shape)?
+                .into_iter()
+                .map(|c| {
+                    let s = ElementState::from_code(c);
+                    match s {
+                        ElementState::Private(t) if t >= n_tasks => bail!("{}: {n}.state names private task {t}, but there are {n_tasks} tasks", dir.join(MODEL_FILE).display()),
+                        _ => Ok(s),
+                    }
+                })
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            let mut masks = BTreeMap::new();
+            let mut biases = BTreeMap::new();
+            for &t in &e.finish_order {
+                let key = format!("{n}.mask.{t}");
+                let bytes = mask_file.raw(&key, Dtype::U8, &mask_file.shape_of(&key)?)?.to_vec();
+                let m = BitMask::from_bytes(out_dim * in_dim, bytes).with_context(|| format!("{}: tensor {key}", dir.join(MASKS_FILE).display()))?;
+                let bad = (0..m.len()).find(|&i| m.get(i) && !matches!(states[i], ElementState::Occupied) && states[i] != ElementState::Private(t));
+                ensure!(bad.is_none(), "{}: {key} selects element {} whose state is {:?}", dir.join(MASKS_FILE).display(), bad.unwrap_or(0), states[bad.unwrap_or(0)]);
+                masks.insert(t, m);
+                biases.insert(t, model.f32s(&format!("{n}.bias.{t}"), &[out_dim])?);
+            }
+            let training = match &e.training {
+                Some(tr) => Some(Training {
+                    task: tr.task,
+                    fine_tune: tr.fine_tune,
+                    iteration: tr.iteration,
+                    bias: var(model.f32s(&format!("{n}.bias.current"), &[out_dim])?, &[out_dim])?,
+                    mask: None,
+                    noise: None,
+                    weight_update: None,
+                    score_update: None,
+                }),
+                None => None,
+            };
+            layers.push(MaskedLinear {
+                name: n.clone(),
+                out_dim,
+                in_dim,
+                cfg: e.mask.clone(),
+                init_bound: le.init_bound,
+                weight: var(model.f32s(&format!("{n}.weight"), &shape)?, &shape)?,
+                score_mean: var(model.f32s(&format!("{n}.score"), &shape)?, &shape)?,
+                sigma: var(model.f32s(&format!("{n}.sigma"), &[1])?, &[1])?,
+                states,
+                masks,
+                biases,
+                finish_order: e.finish_order.clone(),
+                training,
+            });
+        }
+        networks.push(MaskedMlp { name: e.name.clone(), sizes: e.sizes.clone(), activation: e.activation, cfg: e.mask.clone(), layers });
+    }
+    let mut extras = BTreeMap::new();
+    for name in &manifest.extras {
+        let key = format!("extra.{name}");
+        let shape = model.shape_of(&key)?;
+        extras.insert(name.clone(), Tensor::from_vec(model.f32s(&key, &shape)?, shape, &Device::Cpu)?);
+    }
+    Ok(Policy { tasks: manifest.tasks, networks, extras, config: manifest.config })
+}

@@ -1,0 +1,289 @@
+//! The whole MLP as one candle custom op (CPU, f32): the speed path of
+//! [`crate::nn::MaskedMlp`] (`quadcl bench`: actor train step).
+//!
+//! Inputs: x (batch, sizes[0]) and theta, every layer's effective weight
+//! (out, in) row-major followed by its bias (out,), concatenated in layer
+//! order: theta (sum over layers of out * in + out,). Output: (batch, sizes[last]).
+//! Hidden layers apply the activation; the output layer is linear.
+//!
+//! Forward: per layer z = h W^T + b (gemm on slices, bias pre-filled), then
+//! the activation in place (rayon over chunks, a vectorisable exp for ELU).
+//! The hidden activations are kept inside the op instance for its backward,
+//! which computes grad_theta (and grad_x when x needs it) in one pass:
+//! g <- g * act'(h); dW = g^T h_prev; db = column sums of g (fixed-size row
+//! blocks summed in a fixed order: thread-count independent); g <- g W.
+//! candle's autograd sees a single node, so none of its per-node gradient
+//! buffers are made for the (batch, 512) activations.
+
+use crate::config::net::Activation;
+use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
+use gemm::{gemm, Parallelism};
+use rayon::prelude::*;
+use std::sync::Mutex;
+
+const CHUNK: usize = 1 << 14;
+const ROW_BLOCK: usize = 256;
+
+/// e^x for x <= 0 (and moderately positive x), ~2 ulp, branch-free so it vectorises.
+#[inline(always)]
+fn fast_exp(x: f32) -> f32 {
+    let x = x.clamp(-87.0, 88.0);
+    // Round to nearest by the 1.5 * 2^23 trick (no libm call, so the loop vectorises).
+    let n = (x * std::f32::consts::LOG2_E + 12_582_912.0) - 12_582_912.0;
+    let r = x - n * 0.693_145_75 - n * 1.428_606_8e-6;
+    let p = 1.0 + r * (1.0 + r * (0.5 + r * (0.166_666_67 + r * (0.041_666_668 + r * (0.008_333_334 + r * 0.001_388_889)))));
+    f32::from_bits(((n as i32 + 127) << 23) as u32) * p
+}
+
+/// e^x - 1, accurate near 0 (Taylor below |x| < 0.125).
+#[inline(always)]
+pub(crate) fn fast_expm1(x: f32) -> f32 {
+    let taylor = x * (1.0 + x * (0.5 + x * (0.166_666_67 + x * (0.041_666_668 + x * 0.008_333_334))));
+    if x.abs() < 0.125 {
+        taylor
+    } else {
+        fast_exp(x) - 1.0
+    }
+}
+
+fn activate_in_place(act: Activation, v: &mut [f32]) {
+    v.par_chunks_mut(CHUNK).for_each(|c| match act {
+        Activation::Elu => c.iter_mut().for_each(|v| *v = if *v > 0.0 { *v } else { fast_expm1(*v) }),
+        Activation::Relu => c.iter_mut().for_each(|v| *v = v.max(0.0)),
+        Activation::Tanh => c.iter_mut().for_each(|v| *v = v.tanh()),
+        Activation::Identity => {}
+    });
+}
+
+/// g <- g * act'(y) where y is the activation's output.
+fn activation_grad_in_place(act: Activation, g: &mut [f32], y: &[f32]) {
+    g.par_chunks_mut(CHUNK).zip(y.par_chunks(CHUNK)).for_each(|(g, y)| {
+        for (g, &y) in g.iter_mut().zip(y) {
+            *g *= match act {
+                Activation::Elu => if y > 0.0 { 1.0 } else { y + 1.0 },
+                Activation::Relu => if y > 0.0 { 1.0 } else { 0.0 },
+                Activation::Tanh => 1.0 - y * y,
+                Activation::Identity => 1.0,
+            };
+        }
+    });
+}
+
+fn parallelism() -> Parallelism {
+    match candle_core::utils::get_num_threads() {
+        1 => Parallelism::None,
+        n => Parallelism::Rayon(n),
+    }
+}
+
+/// dst (m, n) row-major = alpha * dst + A B, with A and B given by (pointer, col stride, row stride).
+#[allow(clippy::too_many_arguments)]
+fn matmul(m: usize, n: usize, k: usize, dst: &mut [f32], keep_dst: bool, a: &[f32], a_cs: usize, a_rs: usize, b: &[f32], b_cs: usize, b_rs: usize) {
+    assert!(dst.len() >= m * n);
+    // SAFETY: the strides describe in-bounds (m, k) and (k, n) views of `a` and `b`
+    // (asserted by the callers' shapes) and dst is an exclusive (m, n) row-major buffer.
+    unsafe {
+        gemm(m, n, k, dst.as_mut_ptr(), 1, n as isize, keep_dst, a.as_ptr(), a_cs as isize, a_rs as isize, b.as_ptr(), b_cs as isize, b_rs as isize, if keep_dst { 1.0 } else { 0.0 }, 1.0, false, false, false, parallelism())
+    }
+}
+
+/// Offsets of each layer's weight and bias in theta.
+fn offsets(sizes: &[usize]) -> (Vec<(usize, usize)>, usize) {
+    let mut at = 0;
+    let offs = sizes
+        .windows(2)
+        .map(|w| {
+            let o = (at, at + w[0] * w[1]);
+            at += w[0] * w[1] + w[1];
+            o
+        })
+        .collect();
+    (offs, at)
+}
+
+/// The number of elements of theta for these sizes.
+pub fn theta_len(sizes: &[usize]) -> usize {
+    offsets(sizes).1
+}
+
+/// What a forward keeps for its backward: the input, every hidden layer's output, theta.
+type Saved = (Vec<f32>, Vec<Vec<f32>>, Vec<f32>);
+
+/// The fused MLP op; one instance per forward call (it keeps that call's activations).
+pub struct FusedMlp {
+    sizes: Vec<usize>,
+    activation: Activation,
+    /// (input, hidden outputs after activation) of the forward, for backward.
+    saved: Mutex<Option<Saved>>,
+}
+
+impl FusedMlp {
+    fn run(&self, x: &[f32], theta: &[f32], keep: bool) -> Vec<f32> {
+        let batch = x.len() / self.sizes[0];
+        let (offs, _) = offsets(&self.sizes);
+        let last = offs.len() - 1;
+        let mut hidden: Vec<Vec<f32>> = Vec::with_capacity(last);
+        let mut out = Vec::new();
+        for (l, &(w_at, b_at)) in offs.iter().enumerate() {
+            let (fan_in, width) = (self.sizes[l], self.sizes[l + 1]);
+            let h = if l == 0 { x } else { &hidden[l - 1] };
+            let bias = &theta[b_at..b_at + width];
+            let mut z = vec![0f32; batch * width];
+            z.par_chunks_mut(width * ROW_BLOCK).for_each(|rows| rows.chunks_mut(width).for_each(|r| r.copy_from_slice(bias)));
+            // z (batch, width) += h (batch, fan_in) . W^T, W (width, fan_in) row-major.
+            matmul(batch, width, fan_in, &mut z, true, h, 1, fan_in, &theta[w_at..], fan_in, 1);
+            if l < last {
+                activate_in_place(self.activation, &mut z);
+                hidden.push(z);
+            } else {
+                out = z;
+            }
+        }
+        if keep {
+            *self.saved.lock().expect("fused MLP lock") = Some((x.to_vec(), hidden, theta.to_vec()));
+        }
+        out
+    }
+}
+
+/// Runs the MLP: differentiable in x and theta when `track` is true.
+pub fn fused_mlp(sizes: &[usize], activation: Activation, x: &Tensor, theta: &Tensor, track: bool) -> candle_core::Result<Tensor> {
+    let op = FusedMlp { sizes: sizes.to_vec(), activation, saved: Mutex::new(None) };
+    let (x, theta) = (x.contiguous()?, theta.contiguous()?);
+    if track {
+        x.apply_op2(&theta, op)
+    } else {
+        x.apply_op2_no_bwd(&theta, &op)
+    }
+}
+
+fn slice<'a>(s: &'a CpuStorage, l: &Layout) -> candle_core::Result<&'a [f32]> {
+    match l.contiguous_offsets() {
+        Some((a, b)) => Ok(&s.as_slice::<f32>()?[a..b]),
+        None => candle_core::bail!("fused-mlp: expects contiguous f32 tensors"),
+    }
+}
+
+impl CustomOp2 for FusedMlp {
+    fn name(&self) -> &'static str {
+        "fused-mlp"
+    }
+
+    fn cpu_fwd(&self, s1: &CpuStorage, l1: &Layout, s2: &CpuStorage, l2: &Layout) -> candle_core::Result<(CpuStorage, Shape)> {
+        let (x, theta) = (slice(s1, l1)?, slice(s2, l2)?);
+        let dims = l1.dims();
+        if dims.len() != 2 || dims[1] != self.sizes[0] {
+            candle_core::bail!("fused-mlp: input shape {dims:?}, expected (batch, {})", self.sizes[0]);
+        }
+        if theta.len() != theta_len(&self.sizes) {
+            candle_core::bail!("fused-mlp: theta has {} elements, sizes {:?} need {}", theta.len(), self.sizes, theta_len(&self.sizes));
+        }
+        let out = self.run(x, theta, true);
+        Ok((CpuStorage::F32(out), Shape::from((dims[0], *self.sizes.last().expect("sizes checked")))))
+    }
+
+    fn bwd(&self, arg1: &Tensor, _arg2: &Tensor, _res: &Tensor, grad_res: &Tensor) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
+        let guard = self.saved.lock().expect("fused MLP lock");
+        let Some((x, hidden, theta)) = guard.as_ref() else { candle_core::bail!("fused-mlp: backward without forward") };
+        let mut g = grad_res.contiguous()?.flatten_all()?.to_vec1::<f32>()?;
+        let batch = x.len() / self.sizes[0];
+        let (offs, total) = offsets(&self.sizes);
+        let mut grad_theta = vec![0f32; total];
+        let need_x = arg1.track_op();
+        for l in (0..offs.len()).rev() {
+            let (fan_in, width) = (self.sizes[l], self.sizes[l + 1]);
+            let (w_at, b_at) = offs[l];
+            if l < offs.len() - 1 {
+                activation_grad_in_place(self.activation, &mut g, &hidden[l]);
+            }
+            let h: &[f32] = if l == 0 { x } else { &hidden[l - 1] };
+            // dW (width, fan_in) = g^T (width, batch) . h (batch, fan_in).
+            matmul(width, fan_in, batch, &mut grad_theta[w_at..w_at + width * fan_in], false, &g, width, 1, h, 1, fan_in);
+            let partial: Vec<Vec<f32>> = g
+                .par_chunks(width * ROW_BLOCK)
+                .map(|rows| {
+                    let mut s = vec![0f32; width];
+                    rows.chunks(width).for_each(|r| s.iter_mut().zip(r).for_each(|(s, v)| *s += v));
+                    s
+                })
+                .collect();
+            let db = &mut grad_theta[b_at..b_at + width];
+            for p in &partial {
+                db.iter_mut().zip(p).for_each(|(d, v)| *d += v);
+            }
+            if l > 0 || need_x {
+                // g_prev (batch, fan_in) = g (batch, width) . W (width, fan_in).
+                let mut prev = vec![0f32; batch * fan_in];
+                matmul(batch, fan_in, width, &mut prev, false, &g, 1, width, &theta[w_at..], 1, fan_in);
+                g = prev;
+            }
+        }
+        let grad_x = if need_x { Some(Tensor::from_vec(g, (batch, self.sizes[0]), &candle_core::Device::Cpu)?) } else { None };
+        Ok((grad_x, Some(Tensor::from_vec(grad_theta, total, &candle_core::Device::Cpu)?)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nn::activation::activate;
+    use candle_core::{Device, Var};
+
+    #[test]
+    fn matrix_products_do_not_depend_on_the_thread_count() {
+        let (m, n, k) = (300, 200, 1000);
+        let a: Vec<f32> = (0..m * k).map(|i| ((i * 7919) % 1000) as f32 / 1000.0 - 0.5).collect();
+        let b: Vec<f32> = (0..k * n).map(|i| ((i * 104729) % 997) as f32 / 997.0 - 0.5).collect();
+        let run = |par: Parallelism| {
+            let mut dst = vec![0f32; m * n];
+            unsafe { gemm(m, n, k, dst.as_mut_ptr(), 1, n as isize, false, a.as_ptr(), 1, k as isize, b.as_ptr(), 1, n as isize, 0.0, 1.0, false, false, false, par) };
+            dst.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        };
+        let single = run(Parallelism::None);
+        assert!(single == run(Parallelism::Rayon(2)), "2 threads differ from 1");
+        assert!(single == run(Parallelism::Rayon(3)), "3 threads differ from 1");
+    }
+
+    #[test]
+    fn fast_exp_is_accurate() {
+        for i in 0..2000 {
+            let x = -20.0 + i as f32 * 0.0123;
+            let (got, want) = (fast_expm1(x), x.exp_m1());
+            assert!((got - want).abs() <= 2e-6 * want.abs().max(1e-3), "expm1({x}) = {got}, want {want}");
+        }
+    }
+
+    #[test]
+    fn fused_mlp_matches_candle_ops_in_value_and_gradient() {
+        let sizes = [5, 7, 6, 3];
+        for act in [Activation::Elu, Activation::Relu, Activation::Tanh] {
+            let dev = Device::Cpu;
+            let x = Var::from_tensor(&Tensor::randn(0f32, 1.0, (9, 5), &dev).unwrap()).unwrap();
+            let theta = Var::from_tensor(&Tensor::randn(0f32, 0.5, theta_len(&sizes), &dev).unwrap()).unwrap();
+            let fused = fused_mlp(&sizes, act, x.as_tensor(), theta.as_tensor(), true).unwrap();
+            // The reference, with candle's own ops.
+            let (offs, _) = offsets(&sizes);
+            let mut h = x.as_tensor().clone();
+            for (l, &(w_at, b_at)) in offs.iter().enumerate() {
+                let w = theta.as_tensor().narrow(0, w_at, sizes[l] * sizes[l + 1]).unwrap().reshape((sizes[l + 1], sizes[l])).unwrap();
+                let b = theta.as_tensor().narrow(0, b_at, sizes[l + 1]).unwrap();
+                h = h.matmul(&w.t().unwrap()).unwrap().broadcast_add(&b).unwrap();
+                if l + 1 < offs.len() {
+                    h = activate(act, &h).unwrap();
+                }
+            }
+            let close = |a: &Tensor, b: &Tensor, what: &str| {
+                let (a, b) = (a.flatten_all().unwrap().to_vec1::<f32>().unwrap(), b.flatten_all().unwrap().to_vec1::<f32>().unwrap());
+                for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+                    assert!((a - b).abs() < 1e-4 * (1.0 + b.abs()), "{act:?} {what}[{i}]: {a} vs {b}");
+                }
+            };
+            close(&fused, &h, "output");
+            let weights = Tensor::randn(0f32, 1.0, (9, 3), &dev).unwrap();
+            let gf = fused.mul(&weights).unwrap().sum_all().unwrap().backward().unwrap();
+            let gr = h.mul(&weights).unwrap().sum_all().unwrap().backward().unwrap();
+            close(gf.get(theta.as_tensor()).unwrap(), gr.get(theta.as_tensor()).unwrap(), "grad theta");
+            close(gf.get(x.as_tensor()).unwrap(), gr.get(x.as_tensor()).unwrap(), "grad x");
+        }
+    }
+}

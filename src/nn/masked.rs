@@ -1,0 +1,323 @@
+//! MaskedLinear: one linear layer of the method (METHOD.md section 2).
+//!
+//! Shapes: base weights W (out, in), shared by every task; one
+//! [`ElementState`] per element; per finished task t a bit-packed mask M_t
+//! (out * in bits) and its own bias b_t (out,). While task n trains: soft
+//! score means mu (out, in), one sigma per layer, a hard mask M drawn once
+//! per iteration from S = mu + sigma * eps, and the bias b_n (out,).
+//!
+//! Forward for task t: y = x (W * M_t)^T + b_t, x (batch, in) -> (batch, out).
+//!
+//! Gradients (2.2): the training forward uses M_ste = M + (S - stop_grad(S)),
+//! whose value is exactly M, so dL/dW = dL/dWeff * M and
+//! dL/dmu = dL/dM = dL/dWeff * W for every element (straight-through);
+//! dL/dsigma = sum(dL/dM * eps). Which elements may actually move is the
+//! optimiser's update mask: W where selected AND vacant, mu where selectable,
+//! sigma only during the first E iterations (after that it decays, 2.3).
+
+use super::bitmask::BitMask;
+use super::select::{select_mask, SelectionParams};
+use super::state::{ElementState, TaskId};
+use super::Param;
+use crate::config::net::{MaskConfig, SelectionRule};
+use anyhow::Context;
+use candle_core::{DType, Device, Tensor, Var};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal, Uniform};
+use std::collections::BTreeMap;
+
+/// The task being trained and its per-iteration tensors.
+#[derive(Debug, Clone)]
+pub(crate) struct Training {
+    pub task: TaskId,
+    /// A finished task trained again: only PRIVATE(task) weights and its bias move (2.5, 2.7).
+    pub fine_tune: bool,
+    pub iteration: usize,
+    pub bias: Var,
+    /// (out, in) 0/1 hard mask of this iteration; None until `begin_iteration`.
+    pub mask: Option<Tensor>,
+    /// (out, in) eps of this iteration.
+    pub noise: Option<Tensor>,
+    pub weight_update: Option<Tensor>,
+    pub score_update: Option<Tensor>,
+}
+
+/// A linear layer with per-task binary masks over shared base weights.
+#[derive(Debug)]
+pub struct MaskedLinear {
+    pub(crate) name: String,
+    pub(crate) out_dim: usize,
+    pub(crate) in_dim: usize,
+    pub(crate) cfg: MaskConfig,
+    /// Half-width of the uniform initialiser of W.
+    pub(crate) init_bound: f32,
+    pub(crate) weight: Var,
+    pub(crate) score_mean: Var,
+    pub(crate) sigma: Var,
+    pub(crate) states: Vec<ElementState>,
+    pub(crate) masks: BTreeMap<TaskId, BitMask>,
+    pub(crate) biases: BTreeMap<TaskId, Vec<f32>>,
+    /// Finished tasks in the order they first ended (for from_vacant / from_occupied statistics).
+    pub(crate) finish_order: Vec<TaskId>,
+    pub(crate) training: Option<Training>,
+}
+
+fn var_from(values: Vec<f32>, shape: &[usize]) -> anyhow::Result<Var> {
+    Ok(Var::from_tensor(&Tensor::from_vec(values, shape, &Device::Cpu)?)?)
+}
+
+fn set_var(var: &Var, values: Vec<f32>) -> anyhow::Result<()> {
+    let shape = var.as_tensor().dims().to_vec();
+    var.set(&Tensor::from_vec(values, shape, &Device::Cpu)?)?;
+    Ok(())
+}
+
+pub(crate) fn var_values(var: &Var) -> anyhow::Result<Vec<f32>> {
+    Ok(var.as_tensor().flatten_all()?.to_vec1::<f32>()?)
+}
+
+fn mask_tensor(bits: impl Iterator<Item = bool>, out_dim: usize, in_dim: usize) -> anyhow::Result<Tensor> {
+    let v: Vec<f32> = bits.map(|b| if b { 1.0 } else { 0.0 }).collect();
+    Ok(Tensor::from_vec(v, (out_dim, in_dim), &Device::Cpu)?)
+}
+
+impl MaskedLinear {
+    /// A fresh layer: every element vacant, W ~ U(-b, b) with b = sqrt(6 / (c * in)) (He for the
+    /// effective fan-in of a masked row; sqrt(3 / (c * in)) when `gain_relu` is false), mu ~ N(0, score_init_std).
+    pub fn new(name: &str, in_dim: usize, out_dim: usize, gain_relu: bool, cfg: &MaskConfig, rng: &mut impl Rng) -> anyhow::Result<Self> {
+        cfg.validate()?;
+        anyhow::ensure!(in_dim > 0 && out_dim > 0, "{name}: layer shape ({out_dim}, {in_dim}) must be non-empty");
+        let eff_fan_in = (cfg.capacity * in_dim as f64).max(1.0);
+        let init_bound = ((if gain_relu { 6.0 } else { 3.0 }) / eff_fan_in).sqrt() as f32;
+        let n = out_dim * in_dim;
+        let dist = Uniform::new_inclusive(-init_bound, init_bound);
+        let w: Vec<f32> = (0..n).map(|_| dist.sample(rng)).collect();
+        let mu = Self::draw_scores(n, cfg.score_init_std, rng);
+        Ok(Self {
+            name: name.to_string(),
+            out_dim,
+            in_dim,
+            cfg: cfg.clone(),
+            init_bound,
+            weight: var_from(w, &[out_dim, in_dim])?,
+            score_mean: var_from(mu, &[out_dim, in_dim])?,
+            sigma: var_from(vec![cfg.sigma_init as f32], &[1])?,
+            states: vec![ElementState::Vacant; n],
+            masks: BTreeMap::new(),
+            biases: BTreeMap::new(),
+            finish_order: Vec::new(),
+            training: None,
+        })
+    }
+
+    fn draw_scores(n: usize, std: f64, rng: &mut impl Rng) -> Vec<f32> {
+        (0..n).map(|_| { let e: f64 = StandardNormal.sample(rng); (std * e) as f32 }).collect()
+    }
+
+    /// The layer's parameter name, e.g. "actor.l0".
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// (out, in).
+    pub fn shape(&self) -> (usize, usize) {
+        (self.out_dim, self.in_dim)
+    }
+
+    /// Element states, row-major.
+    pub fn states(&self) -> &[ElementState] {
+        &self.states
+    }
+
+    /// The base weights W, row-major (out * in).
+    pub fn weight_values(&self) -> anyhow::Result<Vec<f32>> {
+        var_values(&self.weight)
+    }
+
+    /// The current soft-score sigma of the layer.
+    pub fn sigma(&self) -> anyhow::Result<f32> {
+        Ok(var_values(&self.sigma)?[0])
+    }
+
+    /// The hard mask (out, in) of the current training iteration, if one was drawn.
+    pub fn iteration_mask(&self) -> Option<&Tensor> {
+        self.training.as_ref().and_then(|t| t.mask.as_ref())
+    }
+
+    /// The stored mask of a finished task.
+    pub fn task_mask(&self, task: TaskId) -> Option<&BitMask> {
+        self.masks.get(&task)
+    }
+
+    fn params(&self) -> SelectionParams {
+        SelectionParams { capacity: self.cfg.capacity, vacant_share: self.cfg.vacant_share, rule: self.cfg.rule }
+    }
+
+    /// Starts training `task`: fine-tune mode if it already finished, otherwise a fresh bias,
+    /// sigma back to its initial value, and mu += delta on the elements of related tasks' masks (2.6).
+    pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
+        anyhow::ensure!(self.training.is_none(), "{}: begin_task({task}) while task {} is still in progress", self.name, self.training.as_ref().map_or(0, |t| t.task));
+        let fine_tune = self.masks.contains_key(&task);
+        let bias = match self.biases.get(&task) {
+            Some(b) => var_from(b.clone(), &[self.out_dim])?,
+            None => var_from(vec![0.0; self.out_dim], &[self.out_dim])?,
+        };
+        if !fine_tune {
+            set_var(&self.sigma, vec![self.cfg.sigma_init as f32])?;
+            let mut mu = var_values(&self.score_mean)?;
+            let delta = (self.cfg.transfer_bonus * self.cfg.score_init_std) as f32;
+            let mut bonus = vec![false; mu.len()];
+            for r in related {
+                let m = self.masks.get(r).with_context(|| format!("{}: related task {r} has not finished", self.name))?;
+                (0..mu.len()).filter(|&i| m.get(i)).for_each(|i| bonus[i] = true);
+            }
+            mu.iter_mut().zip(&bonus).filter(|(_, b)| **b).for_each(|(m, _)| *m += delta);
+            set_var(&self.score_mean, mu)?;
+        }
+        self.training = Some(Training { task, fine_tune, iteration: 0, bias, mask: None, noise: None, weight_update: None, score_update: None });
+        Ok(())
+    }
+
+    /// Once per training iteration: draw S = mu + sigma * eps, choose the hard mask, set the update masks.
+    /// After E iterations sigma decays (x decay, floor); it is always kept in [floor, max].
+    pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
+        let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);
+        let params = self.params();
+        let t = self.training.as_mut().with_context(|| format!("{}: begin_iteration without begin_task", self.name))?;
+        t.iteration = iteration;
+        if t.fine_tune {
+            let m = &self.masks[&t.task];
+            t.mask = Some(mask_tensor((0..n).map(|i| m.get(i)), out_dim, in_dim)?);
+            let own = ElementState::Private(t.task);
+            t.weight_update = Some(mask_tensor(self.states.iter().map(|s| *s == own), out_dim, in_dim)?);
+            t.score_update = Some(Tensor::zeros((out_dim, in_dim), DType::F32, &Device::Cpu)?);
+            t.noise = None;
+            return Ok(());
+        }
+        let mut sigma = var_values(&self.sigma)?[0];
+        if iteration >= self.cfg.entropy_iterations {
+            sigma *= self.cfg.sigma_decay as f32;
+        }
+        sigma = sigma.clamp(self.cfg.sigma_floor as f32, self.cfg.sigma_max as f32);
+        set_var(&self.sigma, vec![sigma])?;
+        let mu = var_values(&self.score_mean)?;
+        let eps: Vec<f32> = (0..n).map(|_| StandardNormal.sample(rng)).collect();
+        let sample: Vec<f32> = mu.iter().zip(&eps).map(|(m, e)| m + sigma * e).collect();
+        let selected = select_mask(&sample, &self.states, out_dim, in_dim, t.task, &params);
+        t.mask = Some(mask_tensor(selected.iter().copied(), out_dim, in_dim)?);
+        t.noise = Some(Tensor::from_vec(eps, (out_dim, in_dim), &Device::Cpu)?);
+        let vacant = self.states.iter().map(|s| *s == ElementState::Vacant);
+        t.weight_update = Some(mask_tensor(selected.iter().zip(vacant).map(|(s, v)| *s && v), out_dim, in_dim)?);
+        t.score_update = Some(mask_tensor(self.states.iter().map(|s| s.selectable_by(t.task)), out_dim, in_dim)?);
+        Ok(())
+    }
+
+    fn training_ready(&self) -> anyhow::Result<&Training> {
+        let t = self.training.as_ref().with_context(|| format!("{}: no task in progress (call begin_task)", self.name))?;
+        anyhow::ensure!(t.mask.is_some(), "{}: call begin_iteration before forward", self.name);
+        Ok(t)
+    }
+
+    /// The training effective weight W * M_ste (out, in) and the current bias (out,), both differentiable.
+    pub fn training_weight(&self) -> anyhow::Result<(Tensor, Tensor)> {
+        let t = self.training_ready()?;
+        let mask = t.mask.as_ref().expect("checked by training_ready");
+        let weight = self.weight.as_tensor();
+        let effective = match &t.noise {
+            Some(eps) => {
+                let sample = self.score_mean.as_tensor().add(&eps.broadcast_mul(self.sigma.as_tensor())?)?;
+                let straight_through = mask.add(&sample.sub(&sample.detach())?)?;
+                weight.mul(&straight_through)?
+            }
+            None => weight.mul(mask)?,
+        };
+        Ok((effective, t.bias.as_tensor().clone()))
+    }
+
+    /// Training forward with the current task's hard mask (batch, in) -> (batch, out), differentiable.
+    pub fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+        let (effective, bias) = self.training_weight()?;
+        Ok(x.matmul(&effective.t()?)?.broadcast_add(&bias)?)
+    }
+
+    /// Effective weights W * M_t of a finished task, with exact zeros outside the mask.
+    pub fn recall_weight(&self, task: TaskId) -> anyhow::Result<(Tensor, Tensor)> {
+        let m = self.masks.get(&task).with_context(|| format!("{}: task {task} has not finished (no mask)", self.name))?;
+        let w = var_values(&self.weight)?;
+        let eff: Vec<f32> = w.iter().enumerate().map(|(i, &w)| if m.get(i) { w } else { 0.0 }).collect();
+        let eff = Tensor::from_vec(eff, (self.out_dim, self.in_dim), &Device::Cpu)?;
+        let bias = Tensor::from_slice(&self.biases[&task], self.out_dim, &Device::Cpu)?;
+        Ok((eff, bias))
+    }
+
+    /// Recall of a finished task: x (W * M_t)^T + b_t, not differentiable, bit-identical forever.
+    pub fn forward_task(&self, task: TaskId, x: &Tensor) -> anyhow::Result<Tensor> {
+        let (eff, bias) = self.recall_weight(task)?;
+        Ok(x.matmul(&eff.t()?)?.broadcast_add(&bias)?)
+    }
+
+    /// -beta_H * H with H = sum over the layer's scores of 0.5 ln(2 pi e sigma^2) (2.3); 0 when off or after E iterations.
+    pub fn soft_score_loss(&self) -> anyhow::Result<Tensor> {
+        match &self.training {
+            Some(t) if !t.fine_tune && self.cfg.entropy && t.iteration < self.cfg.entropy_iterations => {
+                let n = (self.out_dim * self.in_dim) as f64;
+                let h = ((self.sigma.as_tensor().log()? * n)? + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
+                Ok((h * -self.cfg.entropy_weight)?.sum_all()?)
+            }
+            _ => Ok(Tensor::zeros((), DType::F32, &Device::Cpu)?),
+        }
+    }
+
+    /// Trainable variables with their update masks: weight, score, sigma, bias (fine-tune: weight and bias only).
+    pub fn parameters(&self) -> Vec<Param> {
+        let Some(t) = &self.training else { return Vec::new() };
+        let p = |suffix: &str, var: &Var, m: Option<&Tensor>| Param { name: format!("{}.{suffix}", self.name), var: var.clone(), update_mask: m.cloned() };
+        let mut out = vec![p("weight", &self.weight, t.weight_update.as_ref())];
+        if !t.fine_tune {
+            out.push(p("score", &self.score_mean, t.score_update.as_ref()));
+            if t.iteration < self.cfg.entropy_iterations {
+                out.push(p("sigma", &self.sigma, None));
+            }
+        }
+        out.push(p("bias", &t.bias, None));
+        out
+    }
+
+    /// End of task (2.4): final mask from mu, private elements, states, re-initialisation.
+    pub fn end_task(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
+        let t = self.training.take().with_context(|| format!("{}: end_task without a task in progress", self.name))?;
+        self.biases.insert(t.task, var_values(&t.bias)?);
+        if t.fine_tune {
+            return Ok(());
+        }
+        let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);
+        let mu = var_values(&self.score_mean)?;
+        let selected = select_mask(&mu, &self.states, out_dim, in_dim, t.task, &self.params());
+        let mut fresh: Vec<usize> = (0..n).filter(|&i| selected[i] && self.states[i] == ElementState::Vacant).collect();
+        fresh.sort_by(|&a, &b| mu[b].total_cmp(&mu[a]).then(a.cmp(&b)));
+        let n_private = ((self.cfg.private_share * n as f64).round() as usize).min(fresh.len());
+        for (rank, &i) in fresh.iter().enumerate() {
+            let to = if rank < n_private { ElementState::Private(t.task) } else { ElementState::Occupied };
+            self.states[i] = self.states[i].transition(to).with_context(|| format!("{} element {i}", self.name))?;
+        }
+        self.masks.insert(t.task, BitMask::from_bools(&selected));
+        self.finish_order.push(t.task);
+        if self.cfg.reinit {
+            let dist = Uniform::new_inclusive(-self.init_bound, self.init_bound);
+            let mut w = var_values(&self.weight)?;
+            for (w, s) in w.iter_mut().zip(&self.states) {
+                if *s == ElementState::Vacant {
+                    *w = dist.sample(rng);
+                }
+            }
+            set_var(&self.weight, w)?;
+            set_var(&self.score_mean, Self::draw_scores(n, self.cfg.score_init_std, rng))?;
+        }
+        Ok(())
+    }
+
+    /// The rule in use (for statistics).
+    pub fn rule(&self) -> SelectionRule {
+        self.cfg.rule
+    }
+}

@@ -1,0 +1,148 @@
+//! MaskedMlp: a stack of [`MaskedLinear`] layers with an activation between
+//! them (the output layer is linear). Used for the actor (512-256-128 ELU by
+//! default), the critic and the CENet. Layers are named "{name}.l0",
+//! "{name}.l1", ...; their tensors "{name}.l0.weight", "{name}.l0.bias", ...
+//!
+//! Shapes: x (batch, sizes[0]) -> (batch, sizes[last]).
+
+use super::activation::activate;
+use super::fused::fused_mlp;
+use super::masked::MaskedLinear;
+use super::state::TaskId;
+use super::Param;
+use crate::config::net::{Activation, MaskConfig};
+use candle_core::Tensor;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A multi-layer perceptron of masked layers sharing one task life cycle.
+#[derive(Debug)]
+pub struct MaskedMlp {
+    pub(crate) name: String,
+    pub(crate) sizes: Vec<usize>,
+    pub(crate) activation: Activation,
+    pub(crate) cfg: MaskConfig,
+    pub(crate) layers: Vec<MaskedLinear>,
+}
+
+impl MaskedMlp {
+    /// `sizes` = [in, hidden.., out]; the initial weights and scores come from `seed` alone.
+    pub fn new(name: &str, sizes: &[usize], activation: Activation, cfg: &MaskConfig, seed: u64) -> anyhow::Result<Self> {
+        anyhow::ensure!(sizes.len() >= 2, "{name}: an MLP needs at least an input and an output size, got {sizes:?}");
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let last = sizes.len() - 2;
+        let layers = sizes
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| {
+                let gain_relu = i < last && matches!(activation, Activation::Elu | Activation::Relu);
+                MaskedLinear::new(&format!("{name}.l{i}"), w[0], w[1], gain_relu, cfg, &mut rng)
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        Ok(Self { name: name.to_string(), sizes: sizes.to_vec(), activation, cfg: cfg.clone(), layers })
+    }
+
+    /// The network's name ("actor", "critic", ...).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// [in, hidden.., out].
+    pub fn sizes(&self) -> &[usize] {
+        &self.sizes
+    }
+
+    /// The activation between hidden layers.
+    pub fn activation(&self) -> Activation {
+        self.activation
+    }
+
+    /// The mask settings.
+    pub fn mask_config(&self) -> &MaskConfig {
+        &self.cfg
+    }
+
+    /// The layers, input first.
+    pub fn layers(&self) -> &[MaskedLinear] {
+        &self.layers
+    }
+
+    /// The task in progress, if any.
+    pub fn current_task(&self) -> Option<TaskId> {
+        self.layers[0].training.as_ref().map(|t| t.task)
+    }
+
+    /// Tasks that have finished at least once, in the order they first ended.
+    pub fn finished_tasks(&self) -> &[TaskId] {
+        &self.layers[0].finish_order
+    }
+
+    /// New task: fresh per-task bias, soft scores (+ forward-transfer bonus on related tasks' masks);
+    /// an already finished task => fine-tune mode (only its private elements and bias train).
+    pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
+        self.layers.iter_mut().try_for_each(|l| l.begin_task(task, related))
+    }
+
+    /// Once per training iteration: draw S = mu + sigma*eps, choose the hard masks, entropy schedule.
+    pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
+        self.layers.iter_mut().try_for_each(|l| l.begin_iteration(iteration, rng))
+    }
+
+    /// Concatenates every layer's (weight, bias) into the fused op's theta and runs it.
+    fn run(&self, x: &Tensor, weights: Vec<(Tensor, Tensor)>, track: bool) -> anyhow::Result<Tensor> {
+        let dims = x.dims();
+        anyhow::ensure!(dims.len() == 2 && dims[1] == self.sizes[0], "{}: input shape {dims:?}, expected (batch, {})", self.name, self.sizes[0]);
+        let mut parts = Vec::with_capacity(2 * weights.len());
+        for (w, b) in weights {
+            parts.push(w.flatten_all()?);
+            parts.push(b);
+        }
+        let theta = Tensor::cat(&parts, 0)?;
+        Ok(fused_mlp(&self.sizes, self.activation, x, &theta, track)?)
+    }
+
+    /// Training forward with the current task's masks, (batch, in) -> (batch, out), differentiable.
+    pub fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+        let weights = self.layers.iter().map(|l| l.training_weight()).collect::<anyhow::Result<_>>()?;
+        self.run(x, weights, true)
+    }
+
+    /// Recall a finished task (W*M_t + b_t), bit-identical forever.
+    pub fn forward_task(&self, task: TaskId, x: &Tensor) -> anyhow::Result<Tensor> {
+        let weights = self.layers.iter().map(|l| l.recall_weight(task)).collect::<anyhow::Result<_>>()?;
+        self.run(x, weights, false)
+    }
+
+    /// The same forward as [`MaskedMlp::forward`] with candle's stock ops, layer by layer
+    /// (the reference the fused op is tested against).
+    pub fn forward_unfused(&self, x: &Tensor) -> anyhow::Result<Tensor> {
+        let last = self.layers.len() - 1;
+        let mut h = x.clone();
+        for (i, l) in self.layers.iter().enumerate() {
+            h = l.forward(&h)?;
+            if i < last {
+                h = activate(self.activation, &h)?;
+            }
+        }
+        Ok(h)
+    }
+
+    /// Scalar -beta_H * H summed over layers (METHOD 2.3); 0 when off or after E iterations.
+    pub fn soft_score_loss(&self) -> anyhow::Result<Tensor> {
+        let mut total = self.layers[0].soft_score_loss()?;
+        for l in &self.layers[1..] {
+            total = total.add(&l.soft_score_loss()?)?;
+        }
+        Ok(total)
+    }
+
+    /// Every trainable Var with its current per-element update mask.
+    pub fn params(&self) -> Vec<Param> {
+        self.layers.iter().flat_map(|l| l.parameters()).collect()
+    }
+
+    /// End of task (METHOD 2.4).
+    pub fn end_task(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
+        self.layers.iter_mut().try_for_each(|l| l.end_task(rng))
+    }
+}

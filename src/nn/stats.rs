@@ -1,0 +1,122 @@
+//! Mask statistics (printed by `quadcl masks`): per network, per layer, per
+//! task, which parameters are used. The JSON shape is stable (scripts read it):
+//!
+//! `{"tasks": [names], "networks": [{"name", "layers": [{"name", "shape": [out, in],
+//! "vacant", "occupied", "private": {task: count}, "per_task": [{"task", "selected",
+//! "fraction", "from_vacant", "from_occupied"}], "overlap": [[count]]}]}]}`
+//!
+//! `from_vacant` counts a task's elements that no task finished before it
+//! used (fresh capacity), `from_occupied` the ones it reused; `overlap[i][j]`
+//! counts elements selected by both the i-th and j-th entries of `per_task`.
+
+use super::masked::MaskedLinear;
+use super::mlp::MaskedMlp;
+use super::state::ElementState;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MaskReport {
+    pub tasks: Vec<String>,
+    pub networks: Vec<NetworkMasks>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NetworkMasks {
+    pub name: String,
+    pub layers: Vec<LayerMasks>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LayerMasks {
+    pub name: String,
+    pub shape: [usize; 2],
+    pub vacant: usize,
+    pub occupied: usize,
+    pub private: BTreeMap<String, usize>,
+    pub per_task: Vec<TaskMask>,
+    pub overlap: Vec<Vec<usize>>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TaskMask {
+    pub task: String,
+    pub selected: usize,
+    /// selected / (out * in), rounded to 6 decimals.
+    pub fraction: f64,
+    pub from_vacant: usize,
+    pub from_occupied: usize,
+}
+
+fn task_name(tasks: &[String], t: usize) -> String {
+    tasks.get(t).cloned().unwrap_or_else(|| format!("task{t}"))
+}
+
+fn layer_masks(l: &MaskedLinear, tasks: &[String]) -> LayerMasks {
+    let (out_dim, in_dim) = l.shape();
+    let n = out_dim * in_dim;
+    let count = |s: ElementState| l.states().iter().filter(|x| **x == s).count();
+    let order = &l.finish_order;
+    let mut private = BTreeMap::new();
+    let mut per_task = Vec::new();
+    let mut ids: Vec<usize> = l.masks.keys().copied().collect();
+    ids.sort_unstable();
+    for &t in &ids {
+        private.insert(task_name(tasks, t), count(ElementState::Private(t)));
+        let m = &l.masks[&t];
+        let pos = order.iter().position(|x| *x == t).unwrap_or(order.len());
+        let earlier: Vec<_> = order[..pos].iter().map(|e| &l.masks[e]).collect();
+        let from_vacant = (0..n).filter(|&i| m.get(i) && !earlier.iter().any(|e| e.get(i))).count();
+        let selected = m.count_ones();
+        per_task.push(TaskMask {
+            task: task_name(tasks, t),
+            selected,
+            fraction: (selected as f64 / n as f64 * 1e6).round() / 1e6,
+            from_vacant,
+            from_occupied: selected - from_vacant,
+        });
+    }
+    let overlap = ids.iter().map(|a| ids.iter().map(|b| l.masks[a].overlap(&l.masks[b])).collect()).collect();
+    LayerMasks {
+        name: l.name().to_string(),
+        shape: [out_dim, in_dim],
+        vacant: count(ElementState::Vacant),
+        occupied: count(ElementState::Occupied),
+        private,
+        per_task,
+        overlap,
+    }
+}
+
+/// The statistics of every network; `tasks` names the task ids.
+pub fn mask_report(tasks: &[String], networks: &[&MaskedMlp]) -> MaskReport {
+    MaskReport {
+        tasks: tasks.to_vec(),
+        networks: networks.iter().map(|n| NetworkMasks { name: n.name().to_string(), layers: n.layers().iter().map(|l| layer_masks(l, tasks)).collect() }).collect(),
+    }
+}
+
+impl MaskReport {
+    /// A readable table: one block per layer, one line per task.
+    pub fn to_table(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let _ = writeln!(s, "tasks: {}", self.tasks.join(", "));
+        for net in &self.networks {
+            for l in &net.layers {
+                let total = l.shape[0] * l.shape[1];
+                let private: usize = l.private.values().sum();
+                let _ = writeln!(s, "\n{} [{} x {}]  vacant {} ({:.1}%)  occupied {} ({:.1}%)  private {} ({:.1}%)", l.name, l.shape[0], l.shape[1], l.vacant, pct(l.vacant, total), l.occupied, pct(l.occupied, total), private, pct(private, total));
+                let _ = writeln!(s, "  {:<24} {:>9} {:>9} {:>11} {:>13} {:>8}", "task", "selected", "fraction", "from_vacant", "from_occupied", "private");
+                for t in &l.per_task {
+                    let _ = writeln!(s, "  {:<24} {:>9} {:>8.1}% {:>11} {:>13} {:>8}", t.task, t.selected, t.fraction * 100.0, t.from_vacant, t.from_occupied, l.private.get(&t.task).copied().unwrap_or(0));
+                }
+            }
+        }
+        s
+    }
+}
+
+fn pct(a: usize, total: usize) -> f64 {
+    100.0 * a as f64 / total.max(1) as f64
+}

@@ -1,0 +1,421 @@
+//! `LocomotionEnv`: one robot, one world, one random stream. reset(seed) /
+//! step(action) -> Step, legged_gym conventions (DESIGN.md, "The environment").
+//!
+//! A policy step: clip the action (ACT_DIM,), apply the task perturbation,
+//! set PD targets = default + action_scale * action, run `decimation`
+//! physics steps, then read the state, compute the Table 1 reward, check
+//! termination (trunk contact or tilt) and time-out, resample the command
+//! every `command_resample_s`, push every `push_interval_s`, and build the
+//! observations. The env does not reset itself: the caller (or `VecEnv`)
+//! calls [`LocomotionEnv::reset_episode`] once a step says it is done.
+
+use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
+use super::physics::{PhysicsParams, RawState, RobotSim};
+use super::reward::{self, RewardInput, RewardTerms, NUM_TERMS};
+use super::robot::RobotModel;
+use super::tasks::Perturbation;
+use crate::config::EnvConfig;
+use anyhow::{bail, Context};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::sync::Arc;
+
+/// How long a push shows in the privileged observation, seconds.
+const PUSH_STATE_HOLD_S: f32 = 1.0;
+
+/// What one policy step returns.
+#[derive(Debug, Clone)]
+pub struct Step {
+    /// Sum of the reward terms.
+    pub reward: f32,
+    /// Each term's contribution.
+    pub terms: RewardTerms,
+    /// Fell (trunk contact or tilt): no bootstrap.
+    pub terminated: bool,
+    /// Episode time-out: bootstrap.
+    pub truncated: bool,
+    /// The finished episode's summary when terminated or truncated.
+    pub finished: Option<EpisodeSummary>,
+}
+
+/// Summary of one finished episode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EpisodeSummary {
+    /// Sum of step rewards.
+    pub episode_return: f32,
+    /// Simulated seconds.
+    pub length_s: f32,
+    /// Mean |v_xy - v_xy_cmd| over the steps, m/s.
+    pub lin_vel_err: f32,
+    /// Mean |w_z - w_z_cmd| over the steps, rad/s.
+    pub ang_vel_err: f32,
+    /// Whether it ended by falling.
+    pub fell: bool,
+    /// Sum of each reward term over the episode, in `reward::TERM_NAMES` order.
+    pub term_sums: [f32; NUM_TERMS],
+}
+
+/// One simulated quadruped with its task.
+pub struct LocomotionEnv {
+    cfg: Arc<EnvConfig>,
+    robot: Arc<RobotModel>,
+    task: Perturbation,
+    /// Index of this env in its batch (for messages).
+    env_index: usize,
+    rng: ChaCha8Rng,
+    sim: RobotSim,
+    default_q: [f32; 12],
+    soft_lower: [f32; 12],
+    soft_upper: [f32; 12],
+    params: PhysicsParams,
+    command: [f32; 3],
+    episode_step: usize,
+    total_steps: u64,
+    push: [f32; 2],
+    push_age_s: f32,
+    state: RawState,
+    last_action: [f32; 12],
+    foot_contacts: [bool; 4],
+    obs: [f32; OBS_DIM],
+    priv_obs: [f32; PRIV_OBS_DIM],
+    history: Vec<f32>,
+    // Episode accumulators.
+    ep_return: f32,
+    ep_lin_err: f32,
+    ep_ang_err: f32,
+    ep_terms: [f32; NUM_TERMS],
+}
+
+impl LocomotionEnv {
+    /// A new env, already reset with seed 0.
+    pub fn new(cfg: &EnvConfig, robot: &RobotModel, task: &Perturbation) -> anyhow::Result<Self> {
+        Self::with_shared_robot(cfg, Arc::new(robot.clone()), task, 0)
+    }
+
+    /// A new env sharing a robot description; `env_index` names it in errors.
+    pub fn with_shared_robot(cfg: &EnvConfig, robot: Arc<RobotModel>, task: &Perturbation, env_index: usize) -> anyhow::Result<Self> {
+        cfg.validate()?;
+        let default_q = default_pose(cfg, &robot);
+        let soft_lower = std::array::from_fn(|i| soft_limit(&robot, cfg, i).0);
+        let soft_upper = std::array::from_fn(|i| soft_limit(&robot, cfg, i).1);
+        let params = PhysicsParams { friction: 1.0, added_mass: 0.0, motor_strength: 1.0 };
+        let sim = build_sim(cfg, &robot, params, &default_q)?;
+        let mut env = Self {
+            cfg: Arc::new(cfg.clone()),
+            robot,
+            task: task.clone(),
+            env_index,
+            rng: ChaCha8Rng::seed_from_u64(0),
+            sim,
+            default_q,
+            soft_lower,
+            soft_upper,
+            params,
+            command: [0.0; 3],
+            episode_step: 0,
+            total_steps: 0,
+            push: [0.0; 2],
+            push_age_s: f32::INFINITY,
+            state: RawState::default(),
+            last_action: [0.0; 12],
+            foot_contacts: [false; 4],
+            obs: [0.0; OBS_DIM],
+            priv_obs: [0.0; PRIV_OBS_DIM],
+            history: vec![0.0; HISTORY_LEN * OBS_DIM],
+            ep_return: 0.0,
+            ep_lin_err: 0.0,
+            ep_ang_err: 0.0,
+            ep_terms: [0.0; NUM_TERMS],
+        };
+        env.reset(0)?;
+        Ok(env)
+    }
+
+    /// Reseeds the env's random stream and starts a new episode.
+    pub fn reset(&mut self, seed: u64) -> anyhow::Result<()> {
+        self.rng = ChaCha8Rng::seed_from_u64(seed);
+        self.reset_episode()
+    }
+
+    /// Starts a new episode, drawing from the env's own random stream:
+    /// domain randomisation, a fresh world at the default pose, a command.
+    pub fn reset_episode(&mut self) -> anyhow::Result<()> {
+        let c = &self.cfg;
+        self.params = if c.randomize {
+            PhysicsParams {
+                friction: uniform(&mut self.rng, c.friction_range),
+                added_mass: uniform(&mut self.rng, c.added_mass_range),
+                motor_strength: uniform(&mut self.rng, c.motor_strength_range),
+            }
+        } else {
+            PhysicsParams { friction: 1.0, added_mass: 0.0, motor_strength: 1.0 }
+        };
+        self.sim = build_sim(c, &self.robot, self.params, &self.default_q)
+            .with_context(|| format!("env {}: building the world", self.env_index))?;
+        self.resample_command();
+        self.episode_step = 0;
+        self.push = [0.0; 2];
+        self.push_age_s = f32::INFINITY;
+        self.last_action = [0.0; 12];
+        self.state = self.sim.state();
+        self.foot_contacts = [false; 4];
+        self.ep_return = 0.0;
+        self.ep_lin_err = 0.0;
+        self.ep_ang_err = 0.0;
+        self.ep_terms = [0.0; NUM_TERMS];
+        self.write_observations();
+        for k in 0..HISTORY_LEN {
+            self.history[k * OBS_DIM..(k + 1) * OBS_DIM].copy_from_slice(&self.obs);
+        }
+        Ok(())
+    }
+
+    /// Current policy observation (OBS_DIM,), layout in `sim::obs`.
+    pub fn observation(&self) -> &[f32; OBS_DIM] {
+        &self.obs
+    }
+
+    /// Current privileged observation (PRIV_OBS_DIM,).
+    pub fn privileged_observation(&self) -> &[f32; PRIV_OBS_DIM] {
+        &self.priv_obs
+    }
+
+    /// The last HISTORY_LEN observations, oldest first (HISTORY_LEN * OBS_DIM,).
+    pub fn obs_history(&self) -> &[f32] {
+        &self.history
+    }
+
+    /// The raw physical state after the last step (world frame).
+    pub fn raw_state(&self) -> &RawState {
+        &self.state
+    }
+
+    /// The current command (vx, vy, wz).
+    pub fn command(&self) -> [f32; 3] {
+        self.command
+    }
+
+    /// Sets the command until the next resample (for evaluation and tests).
+    pub fn set_command(&mut self, command: [f32; 3]) {
+        self.command = command;
+        self.write_observations();
+    }
+
+    /// This episode's physical parameters.
+    pub fn physics_params(&self) -> PhysicsParams {
+        self.params
+    }
+
+    /// The default joint pose, rad.
+    pub fn default_pose(&self) -> &[f32; 12] {
+        &self.default_q
+    }
+
+    /// The PD targets of the last step, rad.
+    pub fn targets(&self) -> &[f32; 12] {
+        self.sim.targets()
+    }
+
+    /// The task perturbation.
+    pub fn task(&self) -> &Perturbation {
+        &self.task
+    }
+
+    /// Changes the task perturbation (takes effect at the next step).
+    pub fn set_task(&mut self, task: &Perturbation) {
+        self.task = task.clone();
+    }
+
+    /// Adds a horizontal velocity change to the trunk now (a push).
+    pub fn push(&mut self, dv: [f32; 2]) {
+        self.sim.push(dv);
+        self.push = dv;
+        self.push_age_s = 0.0;
+    }
+
+    /// One policy step with `action` (ACT_DIM,).
+    pub fn step(&mut self, action: &[f32]) -> anyhow::Result<Step> {
+        let cfg = Arc::clone(&self.cfg);
+        let c = &*cfg;
+        if action.len() != ACT_DIM {
+            bail!("env {}: action has {} values, expected {ACT_DIM}", self.env_index, action.len());
+        }
+        if let Some(i) = action.iter().position(|a| !a.is_finite()) {
+            bail!("env {}: action[{i}] is {} at step {}", self.env_index, action[i], self.total_steps);
+        }
+        let clip = c.clip_actions;
+        let policy_action: [f32; 12] = std::array::from_fn(|i| action[i].clamp(-clip, clip));
+        let mut applied = policy_action;
+        self.task.apply(&mut applied, c.noise_std, &mut self.rng);
+        let targets: [f32; 12] = std::array::from_fn(|i| self.default_q[i] + c.action_scale * applied[i]);
+        self.sim.set_targets(&targets);
+
+        let prev = self.state;
+        for _ in 0..c.decimation {
+            self.sim.step();
+        }
+        let state = self.sim.state();
+        self.check_finite(&state)?;
+        self.state = state;
+        self.total_steps += 1;
+        self.episode_step += 1;
+        let dt = c.policy_dt();
+
+        let (trunk_contact, limb, feet) = self.sim.contacts();
+        self.foot_contacts = feet;
+        let gravity = obs::rotate_into_frame(state.base_quat, [0.0, 0.0, -1.0]);
+        let lin_vel = obs::rotate_into_frame(state.base_quat, state.base_lin_vel);
+        let ang_vel = obs::rotate_into_frame(state.base_quat, state.base_ang_vel);
+        let input = RewardInput {
+            base_lin_vel: lin_vel,
+            base_ang_vel: ang_vel,
+            projected_gravity: gravity,
+            command: self.command,
+            q: state.q,
+            soft_lower: self.soft_lower,
+            soft_upper: self.soft_upper,
+            torques: *self.sim.last_torques(),
+            qdd: std::array::from_fn(|i| (state.qd[i] - prev.qd[i]) / dt),
+            base_height: state.base_pos[2],
+            foot_height: std::array::from_fn(|f| state.foot_pos[f][2] - self.robot.foot_radius[f]),
+            foot_speed_xy: std::array::from_fn(|f| {
+                let dx = state.foot_pos[f][0] - prev.foot_pos[f][0];
+                let dy = state.foot_pos[f][1] - prev.foot_pos[f][1];
+                (dx * dx + dy * dy).sqrt() / dt
+            }),
+            limb_contacts: limb.iter().sum(),
+            action: policy_action,
+            last_action: self.last_action,
+        };
+        let terms = reward::compute(&input, c);
+        let step_reward = terms.total();
+        self.ep_return += step_reward;
+        for (sum, v) in self.ep_terms.iter_mut().zip(terms.values) {
+            *sum += v;
+        }
+        self.ep_lin_err += ((lin_vel[0] - self.command[0]).powi(2) + (lin_vel[1] - self.command[1]).powi(2)).sqrt();
+        self.ep_ang_err += (ang_vel[2] - self.command[2]).abs();
+
+        let tilted = gravity[2] > -c.max_tilt_rad.cos();
+        let terminated = trunk_contact || tilted;
+        let episode_steps = (c.episode_s / dt).round() as usize;
+        let truncated = !terminated && self.episode_step >= episode_steps;
+        self.last_action = policy_action;
+
+        // Commands and pushes for the next step.
+        let resample_steps = ((c.command_resample_s / dt).round() as usize).max(1);
+        if self.episode_step % resample_steps == 0 {
+            self.resample_command();
+        }
+        self.push_age_s += dt;
+        if self.push_age_s > PUSH_STATE_HOLD_S {
+            self.push = [0.0; 2];
+        }
+        if c.push_interval_s > 0.0 {
+            let push_steps = ((c.push_interval_s / dt).round() as usize).max(1);
+            if self.episode_step % push_steps == 0 {
+                let m = c.push_max_vel;
+                let dv = [self.rng.gen_range(-m..=m), self.rng.gen_range(-m..=m)];
+                self.push(dv);
+            }
+        }
+
+        self.write_observations();
+        self.history.copy_within(OBS_DIM.., 0);
+        self.history[(HISTORY_LEN - 1) * OBS_DIM..].copy_from_slice(&self.obs);
+
+        let finished = (terminated || truncated).then(|| {
+            let n = self.episode_step as f32;
+            EpisodeSummary {
+                episode_return: self.ep_return,
+                length_s: n * dt,
+                lin_vel_err: self.ep_lin_err / n,
+                ang_vel_err: self.ep_ang_err / n,
+                fell: terminated,
+                term_sums: self.ep_terms,
+            }
+        });
+        Ok(Step { reward: step_reward, terms, terminated, truncated, finished })
+    }
+
+    fn resample_command(&mut self) {
+        let c = &self.cfg;
+        self.command = [uniform(&mut self.rng, c.cmd_vx), uniform(&mut self.rng, c.cmd_vy), uniform(&mut self.rng, c.cmd_wz)];
+    }
+
+    fn write_observations(&mut self) {
+        let s = &self.state;
+        let input = ObsInput {
+            base_ang_vel: obs::rotate_into_frame(s.base_quat, s.base_ang_vel),
+            projected_gravity: obs::rotate_into_frame(s.base_quat, [0.0, 0.0, -1.0]),
+            command: self.command,
+            q_minus_default: std::array::from_fn(|i| s.q[i] - self.default_q[i]),
+            qd: s.qd,
+            last_action: self.last_action,
+            base_lin_vel: obs::rotate_into_frame(s.base_quat, s.base_lin_vel),
+            foot_contacts: self.foot_contacts,
+            friction: self.params.friction,
+            added_mass: self.params.added_mass,
+            motor_strength: self.params.motor_strength,
+            push: self.push,
+        };
+        obs::write_obs(&input, &mut self.obs);
+        obs::write_priv_obs(&input, &self.obs, &mut self.priv_obs);
+    }
+
+    fn check_finite(&self, s: &RawState) -> anyhow::Result<()> {
+        let groups: [(&str, &[f32]); 6] = [
+            ("trunk position", &s.base_pos),
+            ("trunk orientation", &s.base_quat),
+            ("trunk linear velocity", &s.base_lin_vel),
+            ("trunk angular velocity", &s.base_ang_vel),
+            ("joint position", &s.q),
+            ("joint velocity", &s.qd),
+        ];
+        for (name, values) in groups {
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                bail!(
+                    "env {}: the physics produced a non-finite {name} (component {i} = {}) at step {} (episode step {}, task {})",
+                    self.env_index,
+                    values[i],
+                    self.total_steps + 1,
+                    self.episode_step + 1,
+                    self.task
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+fn uniform(rng: &mut ChaCha8Rng, range: [f32; 2]) -> f32 {
+    if range[0] == range[1] {
+        range[0]
+    } else {
+        rng.gen_range(range[0]..range[1])
+    }
+}
+
+/// The standing pose from the config, in leg-joint order.
+fn default_pose(cfg: &EnvConfig, robot: &RobotModel) -> [f32; 12] {
+    let _ = robot;
+    let mut q = [0.0; 12];
+    for leg in super::robot::Leg::ALL {
+        let l = leg.index();
+        q[3 * l] = if leg.is_left() { cfg.default_hip_left } else { cfg.default_hip_right };
+        q[3 * l + 1] = if leg.is_front() { cfg.default_thigh_front } else { cfg.default_thigh_rear };
+        q[3 * l + 2] = cfg.default_calf;
+    }
+    q
+}
+
+fn soft_limit(robot: &RobotModel, cfg: &EnvConfig, i: usize) -> (f32, f32) {
+    let j = &robot.joints[i];
+    let mid = 0.5 * (j.lower + j.upper);
+    let half = 0.5 * (j.upper - j.lower) * cfg.soft_limit_fraction;
+    (mid - half, mid + half)
+}
+
+fn build_sim(cfg: &EnvConfig, robot: &RobotModel, params: PhysicsParams, q0: &[f32; 12]) -> anyhow::Result<RobotSim> {
+    RobotSim::new(robot, cfg, params, q0)
+}

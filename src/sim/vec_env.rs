@@ -1,0 +1,160 @@
+//! A batch of `LocomotionEnv`s stepped in parallel with rayon, auto-resetting
+//! the ones that finish.
+//!
+//! Determinism: each env owns its world and its own ChaCha stream seeded
+//! from (seed, env index), and results are gathered by index, so the same
+//! seed gives bit-identical numbers whatever the number of rayon threads.
+//! Buffers are row-major: observations (num_envs, OBS_DIM), privileged
+//! observations (num_envs, PRIV_OBS_DIM), histories (num_envs, HISTORY_LEN * OBS_DIM).
+
+use super::env::{EpisodeSummary, LocomotionEnv};
+use super::obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
+use super::robot::RobotModel;
+use super::tasks::Perturbation;
+use crate::config::EnvConfig;
+use anyhow::bail;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// What a batch step returns.
+#[derive(Debug, Clone, Default)]
+pub struct VecStep {
+    /// (num_envs,)
+    pub reward: Vec<f32>,
+    /// Fell (trunk contact / tilt): no bootstrap. (num_envs,)
+    pub terminated: Vec<bool>,
+    /// Time-out: PPO bootstraps. (num_envs,)
+    pub truncated: Vec<bool>,
+    /// (num_envs, OBS_DIM): the observation reached by this step, before any auto-reset.
+    pub next_obs_before_reset: Vec<f32>,
+    /// Episodes that ended in this step, in env order.
+    pub finished: Vec<EpisodeSummary>,
+}
+
+/// A batch of environments.
+pub struct VecEnv {
+    envs: Vec<LocomotionEnv>,
+    obs: Vec<f32>,
+    priv_obs: Vec<f32>,
+    histories: Vec<f32>,
+}
+
+/// The seed of env `index` in a batch seeded with `seed` (splitmix64 of both).
+pub fn env_seed(seed: u64, index: usize) -> u64 {
+    let mut z = seed ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(0x6A09_E667_F3BC_C909);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+impl VecEnv {
+    /// `num_envs` envs with the same task, env i reset with `env_seed(seed, i)`.
+    pub fn new(cfg: &EnvConfig, robot: &RobotModel, task: &Perturbation, num_envs: usize, seed: u64) -> anyhow::Result<Self> {
+        if num_envs == 0 {
+            bail!("a VecEnv needs at least one env");
+        }
+        let robot = Arc::new(robot.clone());
+        let envs = (0..num_envs)
+            .into_par_iter()
+            .map(|i| {
+                let mut env = LocomotionEnv::with_shared_robot(cfg, robot.clone(), task, i)?;
+                env.reset(env_seed(seed, i))?;
+                Ok(env)
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let mut v = Self {
+            obs: vec![0.0; num_envs * OBS_DIM],
+            priv_obs: vec![0.0; num_envs * PRIV_OBS_DIM],
+            histories: vec![0.0; num_envs * HISTORY_LEN * OBS_DIM],
+            envs,
+        };
+        v.gather();
+        Ok(v)
+    }
+
+    /// Number of envs.
+    pub fn num_envs(&self) -> usize {
+        self.envs.len()
+    }
+
+    /// (num_envs, OBS_DIM): current observations (after auto-reset).
+    pub fn observations(&self) -> &[f32] {
+        &self.obs
+    }
+
+    /// (num_envs, PRIV_OBS_DIM)
+    pub fn privileged_observations(&self) -> &[f32] {
+        &self.priv_obs
+    }
+
+    /// (num_envs, HISTORY_LEN * OBS_DIM), oldest first.
+    pub fn obs_histories(&self) -> &[f32] {
+        &self.histories
+    }
+
+    /// The envs, for inspection.
+    pub fn envs(&self) -> &[LocomotionEnv] {
+        &self.envs
+    }
+
+    /// Changes every env's task (takes effect at the next step).
+    pub fn set_task(&mut self, task: &Perturbation) {
+        for env in &mut self.envs {
+            env.set_task(task);
+        }
+    }
+
+    /// Reseeds and resets every env (env i with `env_seed(seed, i)`).
+    pub fn reset(&mut self, seed: u64) -> anyhow::Result<()> {
+        self.envs.par_iter_mut().enumerate().try_for_each(|(i, env)| env.reset(env_seed(seed, i)))?;
+        self.gather();
+        Ok(())
+    }
+
+    /// Steps every env with its row of `actions` (num_envs, ACT_DIM); finished envs are reset.
+    pub fn step(&mut self, actions: &[f32]) -> anyhow::Result<VecStep> {
+        let n = self.envs.len();
+        if actions.len() != n * ACT_DIM {
+            bail!("VecEnv::step: {} actions for {n} envs, expected {} ({n} x {ACT_DIM})", actions.len(), n * ACT_DIM);
+        }
+        let results: Vec<anyhow::Result<(super::env::Step, [f32; OBS_DIM])>> = self
+            .envs
+            .par_iter_mut()
+            .zip(actions.par_chunks(ACT_DIM))
+            .map(|(env, action)| {
+                let step = env.step(action)?;
+                let next_obs = *env.observation();
+                if step.terminated || step.truncated {
+                    env.reset_episode()?;
+                }
+                Ok((step, next_obs))
+            })
+            .collect();
+        let mut out = VecStep {
+            reward: Vec::with_capacity(n),
+            terminated: Vec::with_capacity(n),
+            truncated: Vec::with_capacity(n),
+            next_obs_before_reset: Vec::with_capacity(n * OBS_DIM),
+            finished: Vec::new(),
+        };
+        for r in results {
+            let (step, next_obs) = r?;
+            out.reward.push(step.reward);
+            out.terminated.push(step.terminated);
+            out.truncated.push(step.truncated);
+            out.next_obs_before_reset.extend_from_slice(&next_obs);
+            out.finished.extend(step.finished);
+        }
+        self.gather();
+        Ok(out)
+    }
+
+    fn gather(&mut self) {
+        for (i, env) in self.envs.iter().enumerate() {
+            self.obs[i * OBS_DIM..(i + 1) * OBS_DIM].copy_from_slice(env.observation());
+            self.priv_obs[i * PRIV_OBS_DIM..(i + 1) * PRIV_OBS_DIM].copy_from_slice(env.privileged_observation());
+            let h = HISTORY_LEN * OBS_DIM;
+            self.histories[i * h..(i + 1) * h].copy_from_slice(env.obs_history());
+        }
+    }
+}

@@ -1,0 +1,221 @@
+//! The physics and the environment: standing still, perturbations reaching
+//! exactly the legs they name, falling, and thread-count independence.
+
+use quadcl::config::EnvConfig;
+use quadcl::sim::*;
+use rand::{Rng, SeedableRng};
+
+/// No randomisation, no pushes: the physics alone.
+fn quiet_config() -> EnvConfig {
+    EnvConfig { randomize: false, push_interval_s: 0.0, ..EnvConfig::default() }
+}
+
+fn robot() -> RobotModel {
+    RobotModel::a1().unwrap()
+}
+
+#[test]
+fn zero_action_stands_at_a_stable_trunk_height_for_ten_seconds() {
+    let cfg = EnvConfig { episode_s: 30.0, ..quiet_config() };
+    let mut env = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+    let steps = (10.0 / cfg.policy_dt()).round() as usize;
+    let mut heights = Vec::new();
+    for k in 0..steps {
+        let step = env.step(&[0.0; ACT_DIM]).unwrap();
+        assert!(!step.terminated && !step.truncated, "ended at step {k}");
+        assert!(env.observation().iter().chain(env.privileged_observation()).all(|v| v.is_finite()));
+        heights.push(env.raw_state().base_pos[2]);
+    }
+    // After settling (2 s), the trunk stays within 1 cm, at a standing height.
+    let settled = &heights[(2.0 / cfg.policy_dt()) as usize..];
+    let (lo, hi) = settled.iter().fold((f32::MAX, f32::MIN), |(lo, hi), &h| (lo.min(h), hi.max(h)));
+    assert!(hi - lo < 0.01, "trunk height wanders from {lo} to {hi}");
+    assert!(lo > 0.22 && hi < 0.34, "standing height {lo}..{hi}");
+    // Upright: projected gravity close to (0, 0, -1).
+    assert!(env.observation()[5] < -0.99, "gravity {:?}", &env.observation()[3..6]);
+    // On its four feet, nothing else touching.
+    let contacts = &env.privileged_observation()[obs::PRIV_FOOT_CONTACTS..obs::PRIV_FOOT_CONTACTS + 4];
+    assert_eq!(contacts, [1.0; 4]);
+}
+
+#[test]
+fn commands_are_resampled_every_ten_seconds_within_their_ranges() {
+    let cfg = quiet_config();
+    let mut env = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+    let per_resample = (cfg.command_resample_s / cfg.policy_dt()).round() as usize;
+    let first = env.command();
+    for k in 1..=per_resample {
+        env.step(&[0.0; ACT_DIM]).unwrap();
+        if k < per_resample {
+            assert_eq!(env.command(), first, "changed at step {k}");
+        }
+    }
+    let second = env.command();
+    assert_ne!(second, first);
+    for c in [first, second] {
+        assert!((-1.0..=1.0).contains(&c[0]) && c[1] == 0.0 && c[2].abs() <= std::f32::consts::FRAC_PI_2, "{c:?}");
+    }
+    // The observation carries the scaled command.
+    assert_eq!(env.observation()[6], second[0] * 2.0);
+}
+
+/// One step with the same action on every joint; returns (targets - default) / action_scale.
+fn target_offsets(task: &str, action: f32, cfg: &EnvConfig) -> Vec<f32> {
+    let mut env = LocomotionEnv::new(cfg, &robot(), &task.parse().unwrap()).unwrap();
+    env.step(&[action; ACT_DIM]).unwrap();
+    env.targets().iter().zip(env.default_pose()).map(|(t, d)| (t - d) / cfg.action_scale).collect()
+}
+
+fn leg_offsets(offsets: &[f32], leg: Leg) -> &[f32] {
+    &offsets[3 * leg.index()..3 * leg.index() + 3]
+}
+
+#[test]
+fn crash_holds_the_default_pose_of_exactly_the_named_leg() {
+    let cfg = quiet_config();
+    let offsets = target_offsets("crash:FR", 0.4, &cfg);
+    for leg in Leg::ALL {
+        let expected = if leg == Leg::FR { 0.0 } else { 0.4 };
+        for &o in leg_offsets(&offsets, leg) {
+            assert!((o - expected).abs() < 1e-6, "{leg:?}: {offsets:?}");
+        }
+    }
+    // Physically: the crashed robot moves exactly like an unperturbed one whose
+    // policy sends zero to that leg.
+    let mut crashed = LocomotionEnv::new(&cfg, &robot(), &"crash:FR".parse().unwrap()).unwrap();
+    let mut plain = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    for _ in 0..25 {
+        let action: Vec<f32> = (0..ACT_DIM).map(|_| rng.gen_range(-1.0..1.0)).collect();
+        let mut zeroed = action.clone();
+        zeroed[3..6].fill(0.0);
+        crashed.step(&action).unwrap();
+        plain.step(&zeroed).unwrap();
+        assert_eq!(crashed.raw_state().q, plain.raw_state().q);
+    }
+}
+
+#[test]
+fn invert_mirrors_the_target_offset_of_exactly_the_named_legs() {
+    let offsets = target_offsets("invert:RR+invert:FL", 0.4, &quiet_config());
+    for leg in Leg::ALL {
+        let expected = if matches!(leg, Leg::RR | Leg::FL) { -0.4 } else { 0.4 };
+        for &o in leg_offsets(&offsets, leg) {
+            assert!((o - expected).abs() < 1e-6, "{leg:?}: {offsets:?}");
+        }
+    }
+}
+
+#[test]
+fn noise_has_the_configured_std_on_exactly_the_named_leg() {
+    let cfg = EnvConfig { noise_std: 0.3, ..quiet_config() };
+    let mut env = LocomotionEnv::new(&cfg, &robot(), &"noise:RL".parse().unwrap()).unwrap();
+    let mut samples = Vec::new();
+    for _ in 0..200 {
+        env.step(&[0.1; ACT_DIM]).unwrap();
+        let offsets: Vec<f32> = env.targets().iter().zip(env.default_pose()).map(|(t, d)| (t - d) / cfg.action_scale).collect();
+        for leg in Leg::ALL {
+            for &o in leg_offsets(&offsets, leg) {
+                if leg == Leg::RL {
+                    samples.push(o - 0.1);
+                } else {
+                    assert!((o - 0.1).abs() < 1e-6, "{leg:?} moved: {offsets:?}");
+                }
+            }
+        }
+    }
+    let n = samples.len() as f32;
+    let mean = samples.iter().sum::<f32>() / n;
+    let std = (samples.iter().map(|s| (s - mean).powi(2)).sum::<f32>() / n).sqrt();
+    assert!(mean.abs() < 0.05, "noise mean {mean}");
+    assert!((std - 0.3).abs() < 0.03, "noise std {std}, configured 0.3");
+}
+
+#[test]
+fn a_robot_pushed_over_terminates_as_fallen() {
+    let cfg = quiet_config();
+    let mut env = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+    for _ in 0..25 {
+        env.step(&[0.0; ACT_DIM]).unwrap();
+    }
+    env.push([0.0, 4.0]);
+    let mut ended = None;
+    for k in 0..100 {
+        let step = env.step(&[0.0; ACT_DIM]).unwrap();
+        if step.terminated || step.truncated {
+            ended = Some((k, step));
+            break;
+        }
+    }
+    let (k, step) = ended.expect("a 4 m/s sideways push knocks the robot over within 2 s");
+    assert!(step.terminated && !step.truncated, "at step {k}: {step:?}");
+    let summary = step.finished.unwrap();
+    assert!(summary.fell && summary.length_s < 2.0, "{summary:?}");
+}
+
+#[test]
+fn an_episode_times_out_as_truncated_not_terminated() {
+    let cfg = EnvConfig { episode_s: 0.5, ..quiet_config() };
+    let mut env = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+    let steps = (0.5 / cfg.policy_dt()).round() as usize;
+    for k in 1..=steps {
+        let step = env.step(&[0.0; ACT_DIM]).unwrap();
+        assert_eq!(step.truncated, k == steps, "step {k}");
+        assert!(!step.terminated);
+    }
+}
+
+#[test]
+fn a_non_finite_action_is_an_error_naming_the_env_and_step() {
+    let mut env = LocomotionEnv::new(&quiet_config(), &robot(), &Perturbation::none()).unwrap();
+    let mut action = [0.0; ACT_DIM];
+    action[4] = f32::NAN;
+    let err = format!("{:#}", env.step(&action).unwrap_err());
+    assert!(err.contains("env 0") && err.contains("action[4]") && err.contains("step 0"), "{err}");
+}
+
+fn run_batch(threads: usize) -> (Vec<u32>, Vec<u32>, usize) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| {
+        // Short episodes so auto-resets (and their randomisation) happen too.
+        let cfg = EnvConfig { episode_s: 0.4, push_interval_s: 0.2, ..EnvConfig::default() };
+        let task: Perturbation = "noise:FL+invert:RR".parse().unwrap();
+        let mut envs = VecEnv::new(&cfg, &robot(), &task, 4, 42).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let mut rewards = Vec::new();
+        let mut finished = 0;
+        for _ in 0..30 {
+            let actions: Vec<f32> = (0..4 * ACT_DIM).map(|_| rng.gen_range(-1.0..1.0)).collect();
+            let step = envs.step(&actions).unwrap();
+            rewards.extend(step.reward.iter().map(|r| r.to_bits()));
+            finished += step.finished.len();
+        }
+        let obs = envs.observations().iter().chain(envs.privileged_observations()).chain(envs.obs_histories());
+        (rewards, obs.map(|v| v.to_bits()).collect(), finished)
+    })
+}
+
+#[test]
+fn same_seed_is_bit_identical_with_one_and_two_threads() {
+    let (r1, o1, f1) = run_batch(1);
+    let (r2, o2, f2) = run_batch(2);
+    assert!(f1 >= 4, "episodes should have ended and auto-reset ({f1})");
+    assert_eq!(f1, f2);
+    assert_eq!(r1, r2, "rewards differ");
+    assert_eq!(o1, o2, "observations differ");
+}
+
+#[test]
+fn different_envs_in_a_batch_get_different_randomisation() {
+    let envs = VecEnv::new(&EnvConfig::default(), &robot(), &Perturbation::none(), 3, 1).unwrap();
+    let p: Vec<_> = envs.envs().iter().map(|e| e.physics_params()).collect();
+    assert!(p[0].friction != p[1].friction && p[1].friction != p[2].friction, "{p:?}");
+    for q in &p {
+        assert!((0.5..1.25).contains(&q.friction), "{q:?}");
+        assert!((-1.0..1.0).contains(&q.added_mass), "{q:?}");
+        assert!((0.9..1.1).contains(&q.motor_strength), "{q:?}");
+    }
+    // The critic sees them.
+    let row = &envs.privileged_observations()[obs::PRIV_PHYSICS..obs::PRIV_PHYSICS + 3];
+    assert_eq!(row, [p[0].friction, p[0].added_mass, p[0].motor_strength]);
+}

@@ -1,0 +1,95 @@
+//! The URDF loader: legs found by structure, and malformed descriptions
+//! give errors that name the file and the problem.
+
+use quadcl::sim::RobotModel;
+use std::path::{Path, PathBuf};
+
+fn a1_text() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/a1.urdf")).unwrap()
+}
+
+fn write(dir: &tempfile::TempDir, name: &str, text: &str) -> PathBuf {
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn load_err(name: &str, text: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(&dir, name, text);
+    format!("{:#}", RobotModel::load(&path).unwrap_err())
+}
+
+/// Removes the `<joint name="NAME" ...> ... </joint>` element.
+fn without_joint(text: &str, name: &str) -> String {
+    let start = text.find(&format!("<joint name=\"{name}\"")).unwrap();
+    let end = start + text[start..].find("</joint>").unwrap() + "</joint>".len();
+    format!("{}{}", &text[..start], &text[end..])
+}
+
+#[test]
+fn legs_are_found_by_structure_not_by_joint_names() {
+    // Rename every joint and link so no name says which leg it is.
+    let mut text = a1_text();
+    for (from, to) in [("FL_", "alpha_"), ("FR_", "beta_"), ("RL_", "gamma_"), ("RR_", "delta_")] {
+        text = text.replace(from, to);
+    }
+    text = text.replace("_hip", "_a").replace("_thigh", "_b").replace("_calf", "_c");
+    let dir = tempfile::tempdir().unwrap();
+    let robot = RobotModel::load(&write(&dir, "renamed.urdf", &text)).unwrap();
+    let names: Vec<&str> = robot.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(names[..3], ["alpha_a_joint", "alpha_b_joint", "alpha_c_joint"]);
+    assert_eq!(names[3], "beta_a_joint");
+    assert_eq!(names[6], "gamma_a_joint");
+    assert_eq!(names[9], "delta_a_joint");
+}
+
+#[test]
+fn missing_joint_is_an_error_naming_the_file_and_the_leg() {
+    // Dropping the calf joint leaves the calf link a second root.
+    let text = without_joint(&a1_text(), "RL_calf_joint").replace(
+        "<link name=\"RL_calf\">",
+        "<joint name=\"RL_foot_fixed\" type=\"fixed\"><parent link=\"RL_thigh\"/><child link=\"RL_calf\"/></joint>\n  <link name=\"RL_calf\">",
+    );
+    let err = load_err("missing_calf.urdf", &text);
+    assert!(err.contains("missing_calf.urdf"), "{err}");
+    assert!(err.contains("missing joint") && err.contains("RL_hip_joint") && err.contains("expected 3"), "{err}");
+}
+
+#[test]
+fn bad_number_is_an_error_naming_the_file_and_the_value() {
+    let err = load_err("bad_number.urdf", &a1_text().replacen("<mass value=\"4.713\"/>", "<mass value=\"4.7x13\"/>", 1));
+    assert!(err.contains("bad_number.urdf"), "{err}");
+    assert!(err.contains("bad number") && err.contains("4.7x13") && err.contains("line 11"), "{err}");
+
+    let err = load_err("bad_effort.urdf", &a1_text().replacen("effort=\"55\"", "effort=\"-55\"", 1));
+    assert!(err.contains("bad_effort.urdf") && err.contains("FL_thigh_joint") && err.contains("effort"), "{err}");
+}
+
+#[test]
+fn a_tree_that_is_not_a_quadruped_is_an_error_naming_the_file() {
+    let mut text = a1_text();
+    for joint in ["RR_hip_joint", "RR_thigh_joint", "RR_calf_joint"] {
+        text = without_joint(&text, joint);
+    }
+    for link in ["RR_hip", "RR_thigh", "RR_calf"] {
+        let start = text.find(&format!("<link name=\"{link}\">")).unwrap();
+        let end = start + text[start..].find("</link>").unwrap() + "</link>".len();
+        text = format!("{}{}", &text[..start], &text[end..]);
+    }
+    let err = load_err("tripod.urdf", &text);
+    assert!(err.contains("tripod.urdf") && err.contains("not a quadruped tree") && err.contains("3 leg chains"), "{err}");
+}
+
+#[test]
+fn a_mesh_it_cannot_load_is_skipped_not_fatal() {
+    let text = a1_text().replacen(
+        "<geometry><box size=\"0.267 0.194 0.114\"/></geometry>\n    </collision>",
+        "<geometry><box size=\"0.267 0.194 0.114\"/></geometry>\n    </collision>\n    <collision><geometry><mesh filename=\"meshes/missing.dae\"/></geometry></collision>",
+        1,
+    );
+    assert!(text.contains("missing.dae"));
+    let dir = tempfile::tempdir().unwrap();
+    let robot = RobotModel::load(&write(&dir, "mesh.urdf", &text)).unwrap();
+    assert_eq!(robot.urdf.links[robot.trunk_link].collision.len(), 1);
+}
