@@ -1,27 +1,35 @@
-//! The PPO learner end to end on the point-mass toy environment.
+//! The PPO learner end to end on the point-mass toy environment, with the
+//! masked networks training their weights and masks together (task 0).
 
-use quadcl::config::PpoConfig;
+use quadcl::config::{Config, PpoConfig};
 use quadcl::rl::toy_env::ToyEnv;
 use quadcl::rl::{Agent, PpoLearner, TrainEnv};
 
-fn small_config() -> PpoConfig {
-    PpoConfig {
-        num_envs: 32,
-        steps_per_env: 16,
-        actor_hidden: vec![32, 32],
-        critic_hidden: vec![32, 32],
-        cenet_encoder_hidden: vec![16],
-        cenet_decoder_hidden: vec![16],
-        cenet_latent_dim: 2,
-        init_action_std: 0.5,
-        ..PpoConfig::default()
-    }
+fn small_config() -> Config {
+    let mut cfg = Config {
+        ppo: PpoConfig {
+            num_envs: 32,
+            steps_per_env: 16,
+            cenet_decoder_hidden: vec![16],
+            cenet_latent_dim: 2,
+            init_action_std: 0.5,
+            ..PpoConfig::default()
+        },
+        ..Config::default()
+    };
+    cfg.net.actor.hidden = vec![32, 32];
+    cfg.net.critic.hidden = vec![32, 32];
+    cfg.net.cenet.hidden = vec![16];
+    // These tests check PPO, not the capacity: every weight may be used.
+    cfg.net.mask.capacity = 1.0;
+    cfg
 }
 
-fn run(cfg: &PpoConfig, iterations: usize, seed: u64) -> Vec<quadcl::rl::Metrics> {
-    let mut env = ToyEnv::new(cfg.num_envs, 10, seed);
-    let agent = Agent::new(env.dims(), cfg, seed).unwrap();
-    let mut learner = PpoLearner::new(cfg.clone(), agent, cfg.num_envs, seed).unwrap();
+fn run(cfg: &Config, iterations: usize, seed: u64) -> Vec<quadcl::rl::Metrics> {
+    let mut env = ToyEnv::new(cfg.ppo.num_envs, 10, seed);
+    let mut agent = Agent::new(env.dims(), cfg, seed).unwrap();
+    agent.begin_task(0, &[]).unwrap();
+    let mut learner = PpoLearner::new(cfg.ppo.clone(), agent, cfg.ppo.num_envs, seed).unwrap();
     (0..iterations).map(|_| learner.train_iteration(&mut env).unwrap()).collect()
 }
 
@@ -37,6 +45,7 @@ fn one_iteration_reports_every_namespaced_metric() {
         "losses/value_loss",
         "losses/policy_loss",
         "losses/entropy",
+        "losses/soft_score",
         "losses/cenet_velocity",
         "losses/cenet_reconstruction",
         "losses/cenet_kl",

@@ -51,10 +51,6 @@ pub struct PpoConfig {
     pub max_lr: f64,
     /// Initial standard deviation of the Gaussian policy (state independent, learned, per task).
     pub init_action_std: f64,
-    /// Hidden layer sizes of the actor (obs + CENet estimate -> action means).
-    pub actor_hidden: Vec<usize>,
-    /// Hidden layer sizes of the critic (privileged obs -> value).
-    pub critic_hidden: Vec<usize>,
     /// Observation normalisation: clip normalised values to +-this.
     pub obs_clip: f64,
     /// Normalise observations with running statistics (frozen when a task ends).
@@ -63,9 +59,8 @@ pub struct PpoConfig {
     pub use_cenet: bool,
     /// Size of the CENet latent context z.
     pub cenet_latent_dim: usize,
-    /// Hidden layer sizes of the CENet encoder (history -> velocity + latent mean/logvar).
-    pub cenet_encoder_hidden: Vec<usize>,
-    /// Hidden layer sizes of the CENet decoder (velocity + latent -> next observation).
+    /// Hidden layer sizes of the CENet decoder (velocity + latent -> next
+    /// observation). The actor, critic and encoder sizes are in `[net]`.
     pub cenet_decoder_hidden: Vec<usize>,
     /// beta of the beta-VAE: weight of the KL term of the CENet loss.
     pub cenet_beta: f64,
@@ -75,8 +70,6 @@ pub struct PpoConfig {
     pub cenet_logvar_clamp: f64,
     /// Write a metrics row (and refresh the progress bar) every this many iterations.
     pub log_every: usize,
-    /// Save a checkpoint every this many iterations (0: only at the end).
-    pub save_every: usize,
 }
 
 impl Default for PpoConfig {
@@ -102,19 +95,15 @@ impl Default for PpoConfig {
             min_lr: 1e-5,
             max_lr: 1e-2,
             init_action_std: 1.0,
-            actor_hidden: vec![512, 256, 128],
-            critic_hidden: vec![512, 256, 128],
             obs_clip: 5.0,
             normalize_observations: true,
             use_cenet: true,
             cenet_latent_dim: 16,
-            cenet_encoder_hidden: vec![128, 64],
-            cenet_decoder_hidden: vec![64, 128],
+            cenet_decoder_hidden: vec![128, 256],
             cenet_beta: 1.0,
             cenet_loss_coef: 1.0,
             cenet_logvar_clamp: 10.0,
             log_every: 1,
-            save_every: 0,
         }
     }
 }

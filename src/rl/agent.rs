@@ -5,7 +5,12 @@
 //! - decoder: [velocity 3 | latent sample L] -> next observation (B, obs)
 //! - actor:   [obs | velocity estimate 3 | latent sample L] -> action means (B, act)
 //! - critic:  privileged obs (B, priv) -> value (B, 1)
-//! - `log_std` (act,): the Gaussian policy's state-independent log-std.
+//! - `log_std` (act,): the Gaussian policy's state-independent log-std (per task).
+//!
+//! All four networks are `nn::MaskedMlp`s (METHOD 2): while a task trains
+//! they run with the current task's sampled masks ([`Agent::begin_iteration`]);
+//! after [`Agent::end_task`] (or when loaded from a policy directory) they
+//! recall the task's frozen masks and biases, bit-identically.
 //!
 //! The actor's CENet inputs are detached: the CENet learns only from its own
 //! beta-VAE loss (DreamWaQ), the actor treats its estimate as an input.
@@ -16,8 +21,8 @@ use super::cenet_loss::{reparameterize, split_encoder_output, CenetEstimate};
 use super::env::EnvDims;
 use super::losses::gaussian_log_prob;
 use super::normalizer::RunningNormalizer;
-use super::scaffold::{DenseMlp as Mlp, Param};
-use crate::config::PpoConfig;
+use crate::config::Config;
+use crate::nn::{MaskedMlp, Param, TaskId};
 use candle_core::{Device, Tensor, Var};
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -29,10 +34,14 @@ pub struct Agent {
     /// Latent width L of the CENet (0 when the CENet is off).
     pub latent_dim: usize,
     pub use_cenet: bool,
-    pub actor: Mlp,
-    pub critic: Mlp,
-    pub encoder: Mlp,
-    pub decoder: Mlp,
+    pub actor: MaskedMlp,
+    pub critic: MaskedMlp,
+    pub encoder: MaskedMlp,
+    pub decoder: MaskedMlp,
+    /// The task being trained, or recalled.
+    pub task: TaskId,
+    /// Recall mode: forward with the task's frozen masks (after `end_task`, or loaded).
+    pub recall: bool,
     /// (act,) log standard deviation of the policy.
     pub log_std: Var,
     /// Statistics of the actor observation (also used for each history block).
@@ -68,8 +77,11 @@ pub fn matrix(data: &[f32], width: usize) -> candle_core::Result<Tensor> {
 }
 
 impl Agent {
-    /// Fresh networks for an environment with `dims`; `seed` seeds every initialiser.
-    pub fn new(dims: EnvDims, cfg: &PpoConfig, seed: u64) -> anyhow::Result<Self> {
+    /// Fresh networks for an environment with `dims`; `seed` seeds every
+    /// initialiser. Sizes: `config.net` (actor, critic, CENet encoder),
+    /// `config.ppo.cenet_decoder_hidden` (decoder, with the encoder's activation).
+    pub fn new(dims: EnvDims, config: &Config, seed: u64) -> anyhow::Result<Self> {
+        let (cfg, net) = (&config.ppo, &config.net);
         let latent_dim = if cfg.use_cenet { cfg.cenet_latent_dim } else { 0 };
         let context = if cfg.use_cenet { 3 + latent_dim } else { 0 };
         let sizes = |input: usize, hidden: &[usize], output: usize| {
@@ -78,17 +90,28 @@ impl Agent {
             s.push(output);
             s
         };
-        let actor = Mlp::new("actor", &sizes(dims.obs + context, &cfg.actor_hidden, dims.act), seed)?;
-        let critic = Mlp::new("critic", &sizes(dims.privileged_obs, &cfg.critic_hidden, 1), seed.wrapping_add(1))?;
+        let mask = &net.mask;
+        let actor = MaskedMlp::new("actor", &sizes(dims.obs + context, &net.actor.hidden, dims.act), net.actor.activation, mask, seed)?;
+        let critic = MaskedMlp::new(
+            "critic",
+            &sizes(dims.privileged_obs, &net.critic.hidden, 1),
+            net.critic.activation,
+            mask,
+            seed.wrapping_add(1),
+        )?;
         let history = dims.history_len * dims.obs;
-        let encoder = Mlp::new(
+        let encoder = MaskedMlp::new(
             "cenet_encoder",
-            &sizes(history, &cfg.cenet_encoder_hidden, 3 + 2 * cfg.cenet_latent_dim),
+            &sizes(history, &net.cenet.hidden, 3 + 2 * cfg.cenet_latent_dim),
+            net.cenet.activation,
+            mask,
             seed.wrapping_add(2),
         )?;
-        let decoder = Mlp::new(
+        let decoder = MaskedMlp::new(
             "cenet_decoder",
             &sizes(3 + cfg.cenet_latent_dim, &cfg.cenet_decoder_hidden, dims.obs),
+            net.cenet.activation,
+            mask,
             seed.wrapping_add(3),
         )?;
         let log_std = Var::from_tensor(&Tensor::from_vec(
@@ -104,12 +127,78 @@ impl Agent {
             critic,
             encoder,
             decoder,
+            task: 0,
+            recall: false,
             log_std,
             obs_normalizer: RunningNormalizer::new(dims.obs, cfg.obs_clip as f32),
             privileged_normalizer: RunningNormalizer::new(dims.privileged_obs, cfg.obs_clip as f32),
             normalize: cfg.normalize_observations,
             logvar_clamp: cfg.cenet_logvar_clamp,
         })
+    }
+
+    /// The four networks, in checkpoint order.
+    pub fn networks(&self) -> [&MaskedMlp; 4] {
+        [&self.actor, &self.critic, &self.encoder, &self.decoder]
+    }
+
+    fn networks_mut(&mut self) -> [&mut MaskedMlp; 4] {
+        [&mut self.actor, &mut self.critic, &mut self.encoder, &mut self.decoder]
+    }
+
+    /// Starts training `task` (METHOD 2.1; a finished task => fine-tuning).
+    /// The observation statistics follow the data again.
+    pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
+        for net in self.networks_mut() {
+            net.begin_task(task, related)?;
+        }
+        self.task = task;
+        self.recall = false;
+        self.obs_normalizer.unfreeze();
+        self.privileged_normalizer.unfreeze();
+        Ok(())
+    }
+
+    /// Once per training iteration: new soft-score samples and masks.
+    pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
+        for net in self.networks_mut() {
+            net.begin_iteration(iteration, rng)?;
+        }
+        Ok(())
+    }
+
+    /// Sum of the networks' soft-score losses (METHOD 2.3), a scalar.
+    pub fn soft_score_loss(&self) -> anyhow::Result<Tensor> {
+        let mut total = self.actor.soft_score_loss()?;
+        for net in &self.networks()[1..] {
+            total = total.add(&net.soft_score_loss()?)?;
+        }
+        Ok(total)
+    }
+
+    /// Ends the task (METHOD 2.4): final masks, frozen statistics, recall mode.
+    pub fn end_task(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
+        for net in self.networks_mut() {
+            net.end_task(rng)?;
+        }
+        self.obs_normalizer.freeze();
+        self.privileged_normalizer.freeze();
+        self.recall = true;
+        Ok(())
+    }
+
+    /// Forward through `net`: training masks, or the task's frozen ones in recall mode.
+    fn run(&self, net: &MaskedMlp, x: &Tensor) -> anyhow::Result<Tensor> {
+        if self.recall {
+            net.forward_task(self.task, x)
+        } else {
+            net.forward(x)
+        }
+    }
+
+    /// The decoder's reconstruction of the next observation from `[v_est | z]` (B, 3 + L).
+    pub fn decode(&self, velocity_and_latent: &Tensor) -> anyhow::Result<Tensor> {
+        self.run(&self.decoder, velocity_and_latent)
     }
 
     /// Width of the CENet context the actor sees (3 + L, or 0 without CENet).
@@ -128,6 +217,9 @@ impl Agent {
         if self.use_cenet {
             out.extend(self.encoder.params());
             out.extend(self.decoder.params());
+        }
+        if self.recall {
+            return out; // nothing trains in recall mode
         }
         out.push(Param { name: "log_std".into(), var: self.log_std.clone(), update_mask: None });
         out
@@ -162,7 +254,7 @@ impl Agent {
 
     /// The CENet's estimate from normalised histories (B, H * obs).
     pub fn estimate(&self, history: &Tensor) -> anyhow::Result<CenetEstimate> {
-        split_encoder_output(&self.encoder.forward(history)?, self.latent_dim, self.logvar_clamp)
+        split_encoder_output(&self.run(&self.encoder, history)?, self.latent_dim, self.logvar_clamp)
     }
 
     /// The actor's context from normalised histories: `[v_est | z]` with z
@@ -184,12 +276,12 @@ impl Agent {
     /// Action means from normalised obs (B, obs) and context (B, context): (B, act).
     pub fn action_mean(&self, obs: &Tensor, context: &Tensor) -> anyhow::Result<Tensor> {
         let input = if self.use_cenet { Tensor::cat(&[obs, context], 1)? } else { obs.clone() };
-        self.actor.forward(&input)
+        self.run(&self.actor, &input)
     }
 
     /// Values from normalised privileged obs (B, priv): (B,).
     pub fn value(&self, privileged: &Tensor) -> anyhow::Result<Tensor> {
-        Ok(self.critic.forward(privileged)?.squeeze(1)?)
+        Ok(self.run(&self.critic, privileged)?.squeeze(1)?)
     }
 
     /// Samples actions for normalised obs (N, obs) and histories (N, H * obs).

@@ -14,7 +14,7 @@
 //! | [`policy_dir`] | save/load a trained policy directory (weights, normaliser statistics, manifest) |
 //! | [`env`] | the `TrainEnv` trait: what the learner needs from a batch of environments |
 //! | [`toy_env`] | a point-mass `TrainEnv` for fast tests of the loop |
-//! | [`scaffold`] | temporary dense stand-ins for the `nn` masked types |
+//! | [`sim_env`] | the simulated quadruped (`sim::VecEnv`) as a `TrainEnv` |
 
 pub mod agent;
 pub mod cenet_loss;
@@ -25,13 +25,13 @@ pub mod normalizer;
 pub mod policy_dir;
 pub mod ppo;
 pub mod rollout;
-pub mod scaffold;
+pub mod sim_env;
 pub mod toy_env;
 pub mod trainer;
 
 pub use agent::Agent;
 pub use evaluate::{evaluate, EvalReport};
-pub use policy_dir::{load_policy, save_policy, PolicyManifest};
+pub use policy_dir::{load_policy, save_policy, LoadedPolicy, PolicyInfo};
 pub use trainer::{train, TrainSummary};
 pub use env::{EnvDims, EnvStep, FinishedEpisode, TrainEnv};
 pub use normalizer::RunningNormalizer;

@@ -1,41 +1,32 @@
-//! Saving and loading a trained policy directory: `model.safetensors`
-//! (every network parameter by name, `log_std`, normaliser statistics) and
-//! `manifest.json` (format version, task, the full config, env dims, the
-//! sha256 of the weights file).
-//!
-//! Interim format of the single-task learner; once `nn::checkpoint` lands
-//! the masked networks, bit-packed masks and per-task extras go through it.
+//! Saving and loading a trained policy directory through `nn::checkpoint`:
+//! the four masked networks (base weights, per-task masks and biases), and as
+//! extras per task t: `log_std.t{t}` (the policy's action log-std),
+//! `obs_normalizer.t{t}.{mean,var,count}` and
+//! `privileged_normalizer.t{t}.{mean,var,count}`. The manifest's config is a
+//! [`PolicyInfo`]: the run's full [`Config`], the env widths the networks
+//! were built for, and iterations trained.
 
 use super::agent::Agent;
 use super::env::EnvDims;
 use super::normalizer::RunningNormalizer;
 use crate::config::Config;
-use crate::util::{sha256_hex, write_atomic};
+use crate::nn::checkpoint;
+use crate::nn::TaskId;
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// Version of this directory layout.
-pub const POLICY_FORMAT_VERSION: u32 = 1;
-const WEIGHTS_FILE: &str = "model.safetensors";
-const MANIFEST_FILE: &str = "manifest.json";
-
-/// `manifest.json` of a policy directory.
+/// What `quadcl train` stores as the checkpoint's config.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct PolicyManifest {
-    pub format_version: u32,
-    /// The task the policy was trained on (canonical perturbation name).
-    pub task: String,
-    /// Training iterations completed.
-    pub iterations: usize,
-    /// Environment widths the networks were built for.
-    pub dims: ManifestDims,
+pub struct PolicyInfo {
     /// The whole configuration of the run.
     pub config: Config,
-    /// sha256 of each file, by name.
-    pub sha256: BTreeMap<String, String>,
+    /// Environment widths the networks were built for.
+    pub dims: ManifestDims,
+    /// Training iterations completed.
+    pub iterations: usize,
 }
 
 /// Serialisable copy of [`EnvDims`].
@@ -74,78 +65,71 @@ impl From<ManifestDims> for EnvDims {
     }
 }
 
-fn normalizer_tensors(prefix: &str, n: &RunningNormalizer, out: &mut Vec<(String, Tensor)>) -> anyhow::Result<()> {
-    out.push((format!("{prefix}.mean"), Tensor::new(n.mean().as_slice(), &Device::Cpu)?));
-    out.push((format!("{prefix}.var"), Tensor::new(n.var().as_slice(), &Device::Cpu)?));
-    out.push((format!("{prefix}.count"), Tensor::new(&[n.count()], &Device::Cpu)?));
+/// A loaded policy: the agent in recall mode on its task, the task names and the info.
+#[derive(Debug)]
+pub struct LoadedPolicy {
+    pub agent: Agent,
+    pub tasks: Vec<String>,
+    pub info: PolicyInfo,
+}
+
+fn put_normalizer(prefix: &str, n: &RunningNormalizer, out: &mut BTreeMap<String, Tensor>) -> anyhow::Result<()> {
+    out.insert(format!("{prefix}.mean"), Tensor::new(n.mean().as_slice(), &Device::Cpu)?);
+    out.insert(format!("{prefix}.var"), Tensor::new(n.var().as_slice(), &Device::Cpu)?);
+    out.insert(format!("{prefix}.count"), Tensor::new(&[n.count() as f32], &Device::Cpu)?);
     Ok(())
 }
 
-fn normalizer_from(prefix: &str, tensors: &std::collections::HashMap<String, Tensor>, clip: f32) -> anyhow::Result<RunningNormalizer> {
-    let get = |key: &str| tensors.get(&format!("{prefix}.{key}")).with_context(|| format!("missing tensor {prefix}.{key}"));
-    let count = get("count")?.to_vec1::<f64>()?.first().copied().unwrap_or(0.0);
-    RunningNormalizer::from_saved(&get("mean")?.to_vec1::<f32>()?, &get("var")?.to_vec1::<f32>()?, count, clip)
+fn get_normalizer(prefix: &str, extras: &BTreeMap<String, Tensor>, clip: f32) -> anyhow::Result<RunningNormalizer> {
+    let get = |key: &str| extras.get(&format!("{prefix}.{key}")).with_context(|| format!("missing extra tensor {prefix}.{key}"));
+    let count = get("count")?.flatten_all()?.to_vec1::<f32>()?.first().copied().unwrap_or(0.0);
+    RunningNormalizer::from_saved(&get("mean")?.to_vec1::<f32>()?, &get("var")?.to_vec1::<f32>()?, f64::from(count), clip)
 }
 
-/// Writes `agent` (its normalisers as they are: freeze them first to end a
-/// task) to `dir`, creating it.
-pub fn save_policy(agent: &Agent, config: &Config, task: &str, iterations: usize, dir: &Path) -> anyhow::Result<()> {
-    let mut tensors: Vec<(String, Tensor)> =
-        agent.params().into_iter().map(|p| (p.name, p.var.as_tensor().copy())).map(|(n, t)| t.map(|t| (n, t))).collect::<candle_core::Result<_>>()?;
-    normalizer_tensors("obs_normalizer", &agent.obs_normalizer, &mut tensors)?;
-    normalizer_tensors("privileged_normalizer", &agent.privileged_normalizer, &mut tensors)?;
-    let bytes = safetensors::serialize(tensors.iter().map(|(n, t)| (n.clone(), t)), None)
-        .with_context(|| format!("serialising weights for {}", dir.display()))?;
-    write_atomic(&dir.join(WEIGHTS_FILE), &bytes)?;
-    let manifest = PolicyManifest {
-        format_version: POLICY_FORMAT_VERSION,
-        task: task.to_string(),
-        iterations,
-        dims: agent.dims.into(),
-        config: config.clone(),
-        sha256: BTreeMap::from([(WEIGHTS_FILE.to_string(), sha256_hex(&bytes))]),
+/// Writes `agent` after its task ended (`agent.end_task`) to `dir`.
+/// `tasks[t]` names task id t.
+pub fn save_policy(agent: &Agent, tasks: &[String], info: &PolicyInfo, dir: &Path) -> anyhow::Result<()> {
+    anyhow::ensure!(agent.task < tasks.len(), "task id {} has no name among {} tasks", agent.task, tasks.len());
+    let t = agent.task;
+    let mut extras = BTreeMap::new();
+    extras.insert(format!("log_std.t{t}"), agent.log_std.as_tensor().copy()?);
+    put_normalizer(&format!("obs_normalizer.t{t}"), &agent.obs_normalizer, &mut extras)?;
+    put_normalizer(&format!("privileged_normalizer.t{t}"), &agent.privileged_normalizer, &mut extras)?;
+    checkpoint::save_policy(dir, tasks, &agent.networks(), &extras, &serde_json::to_value(info)?)
+}
+
+/// Reads a policy directory and returns the agent recalling task `task`
+/// (by name; `None`: the last task). Errors name the directory and what is wrong.
+pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolicy> {
+    let policy = checkpoint::load_policy(dir)?;
+    let info: PolicyInfo = serde_json::from_value(policy.config.clone())
+        .with_context(|| format!("{}: the manifest's config is not a quadcl training config", dir.display()))?;
+    let task_id: TaskId = match task {
+        Some(name) => policy
+            .tasks
+            .iter()
+            .position(|t| t == name)
+            .with_context(|| format!("{}: no task {name:?}; it has {:?}", dir.display(), policy.tasks))?,
+        None => policy.tasks.len().checked_sub(1).with_context(|| format!("{}: the policy has no tasks", dir.display()))?,
     };
-    write_atomic(&dir.join(MANIFEST_FILE), serde_json::to_string_pretty(&manifest)?.as_bytes())
-}
-
-/// Reads a policy directory: the agent (normalisers frozen) and its manifest.
-/// Errors name the directory and what is wrong (missing file, hash mismatch,
-/// missing or misshapen tensor).
-pub fn load_policy(dir: &Path) -> anyhow::Result<(Agent, PolicyManifest)> {
-    let manifest_path = dir.join(MANIFEST_FILE);
-    let text = std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
-    let manifest: PolicyManifest =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", manifest_path.display()))?;
-    anyhow::ensure!(
-        manifest.format_version == POLICY_FORMAT_VERSION,
-        "{}: format version {} (this build reads {POLICY_FORMAT_VERSION})",
-        manifest_path.display(),
-        manifest.format_version
-    );
-    let weights_path = dir.join(WEIGHTS_FILE);
-    let bytes = std::fs::read(&weights_path).with_context(|| format!("reading {}", weights_path.display()))?;
-    if let Some(expected) = manifest.sha256.get(WEIGHTS_FILE) {
-        anyhow::ensure!(&sha256_hex(&bytes) == expected, "{}: sha256 does not match the manifest", weights_path.display());
-    }
-    let tensors = candle_core::safetensors::load_buffer(&bytes, &Device::Cpu)
-        .with_context(|| format!("decoding {}", weights_path.display()))?;
-    let ppo = &manifest.config.ppo;
-    let mut agent = Agent::new(manifest.dims.into(), ppo, manifest.config.seed)?;
-    for p in agent.params() {
-        let t = tensors.get(&p.name).with_context(|| format!("{}: missing tensor {}", weights_path.display(), p.name))?;
-        anyhow::ensure!(
-            t.dims() == p.var.as_tensor().dims(),
-            "{}: tensor {} has shape {:?}, the config builds {:?}",
-            weights_path.display(),
-            p.name,
-            t.dims(),
-            p.var.as_tensor().dims()
-        );
-        p.var.set(t)?;
-    }
-    let clip = ppo.obs_clip as f32;
-    agent.obs_normalizer = normalizer_from("obs_normalizer", &tensors, clip).with_context(|| weights_path.display().to_string())?;
+    let mut networks = policy.networks;
+    let mut take = |name: &str| -> anyhow::Result<crate::nn::MaskedMlp> {
+        let i = networks.iter().position(|n| n.name() == name).with_context(|| format!("{}: no network {name}", dir.display()))?;
+        Ok(networks.swap_remove(i))
+    };
+    let mut agent = Agent::new(info.dims.into(), &info.config, info.config.seed)?;
+    agent.actor = take("actor")?;
+    agent.critic = take("critic")?;
+    agent.encoder = take("cenet_encoder")?;
+    agent.decoder = take("cenet_decoder")?;
+    let extras = &policy.extras;
+    let log_std = extras.get(&format!("log_std.t{task_id}")).with_context(|| format!("{}: missing log_std.t{task_id}", dir.display()))?;
+    agent.log_std.set(log_std)?;
+    let clip = info.config.ppo.obs_clip as f32;
+    agent.obs_normalizer = get_normalizer(&format!("obs_normalizer.t{task_id}"), extras, clip).with_context(|| dir.display().to_string())?;
     agent.privileged_normalizer =
-        normalizer_from("privileged_normalizer", &tensors, clip).with_context(|| weights_path.display().to_string())?;
-    Ok((agent, manifest))
+        get_normalizer(&format!("privileged_normalizer.t{task_id}"), extras, clip).with_context(|| dir.display().to_string())?;
+    agent.task = task_id;
+    agent.recall = true;
+    Ok(LoadedPolicy { agent, tasks: policy.tasks, info })
 }

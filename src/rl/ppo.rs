@@ -20,8 +20,8 @@ use super::losses::{
     normalize_advantages, value_loss,
 };
 use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, StepRecord};
-use super::scaffold::Adam;
 use crate::config::PpoConfig;
+use crate::nn::{AdamConfig, MaskedAdam};
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -38,7 +38,7 @@ const EPISODE_WINDOW: usize = 100;
 pub struct PpoLearner {
     pub cfg: PpoConfig,
     pub agent: Agent,
-    pub optimizer: Adam,
+    pub optimizer: MaskedAdam,
     buffer: RolloutBuffer,
     rng: ChaCha8Rng,
     /// (act,) the policy's log-std when the rollout was collected.
@@ -61,7 +61,7 @@ impl PpoLearner {
             context: agent.context_dim(),
         };
         Ok(Self {
-            optimizer: Adam::new(cfg.learning_rate),
+            optimizer: MaskedAdam::new(AdamConfig { learning_rate: cfg.learning_rate, ..AdamConfig::default() }),
             buffer: RolloutBuffer::new(dims, cfg.steps_per_env, num_envs),
             rng: ChaCha8Rng::seed_from_u64(seed),
             rollout_log_std: None,
@@ -72,9 +72,15 @@ impl PpoLearner {
         })
     }
 
+    /// Ends the agent's task (final masks, frozen statistics), with the learner's random stream.
+    pub fn end_task(&mut self) -> anyhow::Result<()> {
+        self.agent.end_task(&mut self.rng)
+    }
+
     /// One training iteration: a rollout, then an update. Returns its metrics.
     pub fn train_iteration(&mut self, env: &mut dyn TrainEnv) -> anyhow::Result<Metrics> {
         let start = Instant::now();
+        self.agent.begin_iteration(self.iteration, &mut self.rng)?;
         let mut metrics = self.collect_rollout(env)?;
         let rollout_s = start.elapsed().as_secs_f64();
         let update_start = Instant::now();
@@ -210,7 +216,7 @@ impl PpoLearner {
                     let estimate = self.agent.estimate(&history)?;
                     let noise = normal_tensor(&mut self.rng, indices.len(), self.agent.latent_dim)?;
                     let z = reparameterize(&estimate.latent_mean, &estimate.latent_logvar, &noise)?;
-                    let reconstruction = self.agent.decoder.forward(&Tensor::cat(&[&estimate.velocity, &z], 1)?)?;
+                    let reconstruction = self.agent.decode(&Tensor::cat(&[&estimate.velocity, &z], 1)?)?;
                     let cenet = cenet_loss(
                         &estimate,
                         &rows(&b.base_velocity, 3)?,
@@ -223,6 +229,11 @@ impl PpoLearner {
                     add(&mut sums, "losses/cenet_reconstruction", &cenet.reconstruction_mse)?;
                     add(&mut sums, "losses/cenet_kl", &cenet.kl)?;
                 }
+
+                // The masks' soft-score entropy term (METHOD 2.3; 0 after E iterations).
+                let soft_score_loss = self.agent.soft_score_loss()?;
+                loss = loss.add(&soft_score_loss)?;
+                add(&mut sums, "losses/soft_score", &soft_score_loss)?;
 
                 let params = self.agent.params();
                 let mut grads = loss.backward()?;

@@ -4,13 +4,13 @@
 //! - `config.toml`: the full configuration of the run;
 //! - `metrics.jsonl`: one JSON object per iteration with the namespaced
 //!   metrics (`charts/episodic_return`, `losses/approx_kl`, `charts/SPS`, ...);
-//! - `policy/`: the trained policy (see [`super::policy_dir`]), saved every
-//!   `save_every` iterations and at the end, with its observation statistics
-//!   frozen at the end (they belong to the task).
+//! - `policy/`: the trained policy (see [`super::policy_dir`]), saved when
+//!   the task ends (final masks chosen, observation statistics frozen: they
+//!   belong to the task). The base policy is task 0 of the masked learner.
 
 use super::agent::Agent;
 use super::env::TrainEnv;
-use super::policy_dir::save_policy;
+use super::policy_dir::{save_policy, PolicyInfo};
 use super::ppo::{Metrics, PpoLearner};
 use crate::config::Config;
 use crate::util::write_atomic;
@@ -48,7 +48,8 @@ pub fn train(config: &Config, task: &str, env: &mut dyn TrainEnv, out: &Path, pr
     let cfg = &config.ppo;
     cfg.validate()?;
     write_atomic(&out.join("config.toml"), config.to_toml_string().as_bytes())?;
-    let agent = Agent::new(env.dims(), cfg, config.seed)?;
+    let mut agent = Agent::new(env.dims(), config, config.seed)?;
+    agent.begin_task(0, &[])?;
     let mut learner = PpoLearner::new(cfg.clone(), agent, env.num_envs(), learner_seed(config.seed))?;
 
     let bar = if progress { ProgressBar::new(cfg.iterations as u64) } else { ProgressBar::hidden() };
@@ -74,9 +75,6 @@ pub fn train(config: &Config, task: &str, env: &mut dyn TrainEnv, out: &Path, pr
         if last || (it + 1) % METRICS_FLUSH_EVERY == 0 {
             write_atomic(&out.join("metrics.jsonl"), log.as_bytes())?;
         }
-        if cfg.save_every > 0 && (it + 1) % cfg.save_every == 0 && !last {
-            save_policy(&learner.agent, config, task, it + 1, &out.join("policy"))?;
-        }
         if cfg.log_every > 0 && (it % cfg.log_every == 0 || last) {
             let get = |k: &str| m.get(k).copied().unwrap_or(f64::NAN);
             bar.set_message(format!(
@@ -91,9 +89,9 @@ pub fn train(config: &Config, task: &str, env: &mut dyn TrainEnv, out: &Path, pr
         summary.last = m;
     }
     bar.finish();
-    learner.agent.obs_normalizer.freeze();
-    learner.agent.privileged_normalizer.freeze();
-    save_policy(&learner.agent, config, task, cfg.iterations, &out.join("policy"))?;
+    learner.end_task()?;
+    let info = PolicyInfo { config: config.clone(), dims: env.dims().into(), iterations: cfg.iterations };
+    save_policy(&learner.agent, &[task.to_string()], &info, &out.join("policy"))?;
     summary.iterations = cfg.iterations;
     summary.wall_s = start.elapsed().as_secs_f64();
     Ok(summary)
