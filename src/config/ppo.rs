@@ -49,6 +49,13 @@ pub struct PpoConfig {
     pub min_lr: f64,
     /// Upper clamp of the adaptive learning rate.
     pub max_lr: f64,
+    /// Clip each step's total reward at zero before the learner sees it
+    /// (legged_gym's `only_positive_rewards`): with the Table 1 penalties the
+    /// step reward is negative early on, and a learner that sees negative
+    /// rewards learns to fall as fast as it can to end the episode. Measured:
+    /// without it the base run's episodes shrank from 3.3 s to 0.27 s in 400
+    /// iterations. Episode returns in the metrics are the env's, unclipped.
+    pub only_positive_rewards: bool,
     /// Initial standard deviation of the Gaussian policy (state independent, learned, per task).
     pub init_action_std: f64,
     /// Observation normalisation: clip normalised values to +-this.
@@ -94,6 +101,7 @@ impl Default for PpoConfig {
             lr_factor: 1.5,
             min_lr: 1e-5,
             max_lr: 1e-2,
+            only_positive_rewards: true,
             init_action_std: 1.0,
             obs_clip: 5.0,
             normalize_observations: true,

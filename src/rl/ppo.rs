@@ -119,6 +119,11 @@ impl PpoLearner {
             env_s += env_start.elapsed().as_secs_f64();
 
             let next_obs = self.agent.normalize_obs(&step.next_obs_before_reset);
+            let rewards: Vec<f32> = if self.cfg.only_positive_rewards {
+                step.reward.iter().map(|r| r.max(0.0)).collect()
+            } else {
+                step.reward.clone()
+            };
             self.buffer.push(&StepRecord {
                 obs: &obs,
                 privileged_obs: &privileged,
@@ -130,7 +135,7 @@ impl PpoLearner {
                 action_means: &act.means,
                 log_probs: &act.log_probs,
                 values: &values,
-                rewards: &step.reward,
+                rewards: &rewards,
                 terminated: &step.terminated,
                 truncated: &step.truncated,
             })?;
