@@ -26,6 +26,10 @@ pub struct TrainArgs {
     /// Override the master seed of the config.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Go on from DIR/checkpoint/ (written every `ppo.checkpoint_every`
+    /// iterations) with the same config; `--iterations` may raise the total.
+    #[arg(long)]
+    pub resume: bool,
 }
 
 pub fn run(args: TrainArgs) -> anyhow::Result<()> {
@@ -37,9 +41,15 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         config.seed = seed;
     }
     let task: Perturbation = args.task.parse()?;
-    let mut env = SimTrainEnv::new(&config.env, &task, config.ppo.num_envs, config.seed)?;
+    let task_name = task.to_string();
+    let resume = if args.resume { Some(crate::rl::trainer::load_resume_point(&config, &task_name, &args.out)?) } else { None };
+    let env_seed = match &resume {
+        Some((_, state)) => crate::rl::trainer::resume_seed(config.seed, state.iteration),
+        None => config.seed,
+    };
+    let mut env = SimTrainEnv::new(&config.env, &task, config.ppo.num_envs, env_seed)?;
     let progress = std::io::stderr().is_terminal();
-    let summary = crate::rl::train(&config, &task.to_string(), &mut env, &args.out, progress)?;
+    let summary = crate::rl::trainer::train_from(&config, &task_name, &mut env, &args.out, progress, resume)?;
     let report = serde_json::json!({
         "task": task.to_string(),
         "iterations": summary.iterations,

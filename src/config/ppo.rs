@@ -77,6 +77,10 @@ pub struct PpoConfig {
     pub cenet_logvar_clamp: f64,
     /// Write a metrics row (and refresh the progress bar) every this many iterations.
     pub log_every: usize,
+    /// Save a checkpoint of the run in progress (`checkpoint/` in the output
+    /// folder) every this many iterations, so `quadcl train --resume` can go
+    /// on after an interruption; 0: never.
+    pub checkpoint_every: usize,
 }
 
 impl Default for PpoConfig {
@@ -112,6 +116,7 @@ impl Default for PpoConfig {
             cenet_loss_coef: 1.0,
             cenet_logvar_clamp: 10.0,
             log_every: 1,
+            checkpoint_every: 25,
         }
     }
 }

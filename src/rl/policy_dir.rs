@@ -133,3 +133,27 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
     agent.recall = true;
     Ok(LoadedPolicy { agent, tasks: policy.tasks, info })
 }
+
+/// Reads a checkpoint written while its last task was still training (see
+/// `trainer`) and returns the agent ready to go on training that task: the
+/// networks keep their soft scores and training state, the observation
+/// statistics follow the data again. A policy whose tasks all ended is an
+/// error: a finished task can only be fine-tuned (METHOD 2.5), not resumed.
+pub fn load_training_checkpoint(dir: &Path) -> anyhow::Result<LoadedPolicy> {
+    let mut loaded = load_policy(dir, None)?;
+    let task = loaded.agent.task;
+    for net in loaded.agent.networks() {
+        anyhow::ensure!(
+            net.current_task() == Some(task),
+            "{}: network {} is not training task {} ({:?}): not a checkpoint of a run in progress",
+            dir.display(),
+            net.name(),
+            loaded.tasks[task],
+            net.current_task()
+        );
+    }
+    loaded.agent.recall = false;
+    loaded.agent.obs_normalizer.unfreeze();
+    loaded.agent.privileged_normalizer.unfreeze();
+    Ok(loaded)
+}
