@@ -1,5 +1,7 @@
 //! One file per CLI subcommand: thin glue between the command line and the modules.
 
 pub mod bench;
+pub mod eval;
 pub mod masks;
+pub mod train;
 pub mod welcome;

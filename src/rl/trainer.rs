@@ -1,0 +1,239 @@
+//! One task's training run, start to end: the loop behind `quadcl train`.
+//!
+//! Writes into the output directory:
+//! - `config.toml`: the full configuration of the run;
+//! - `metrics.jsonl`: one JSON object per iteration with the namespaced
+//!   metrics (`charts/episodic_return`, `losses/approx_kl`, `charts/SPS`, ...);
+//! - `policy/`: the trained policy (see [`super::policy_dir`]), saved when
+//!   the task ends (final masks chosen, observation statistics frozen: they
+//!   belong to the task). The base policy is task 0 of the masked learner.
+//! - `checkpoint/`: every `ppo.checkpoint_every` iterations, the run in
+//!   progress (networks with their soft scores, log-std, normaliser
+//!   statistics, and `trainer.json`: iterations done, learning rate, env
+//!   steps). The folder is replaced as a whole (written beside, then renamed),
+//!   so an interruption leaves the previous checkpoint intact.
+//!
+//! `--resume` goes on from `checkpoint/` (with `--iterations` equal to the
+//! checkpoint's, it only ends the task and writes `policy/`): the networks, statistics, learning
+//! rate and iteration count are restored, metrics rows after the checkpoint
+//! are dropped; Adam's moments restart, and the environments and the
+//! learner's random stream start afresh from seeds derived from (seed,
+//! iteration). A resumed run is deterministic, but not bit-identical to one
+//! that never stopped.
+
+use super::agent::Agent;
+use super::env::TrainEnv;
+use super::policy_dir::{load_training_checkpoint, save_policy, PolicyInfo};
+use super::ppo::{Metrics, PpoLearner};
+use crate::config::Config;
+use crate::util::write_atomic;
+use indicatif::{ProgressBar, ProgressStyle};
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::time::Instant;
+
+/// Rewrite `metrics.jsonl` at least every this many iterations.
+const METRICS_FLUSH_EVERY: usize = 10;
+
+/// What a finished run reports.
+#[derive(Debug, Clone)]
+pub struct TrainSummary {
+    pub iterations: usize,
+    /// Environment control steps taken (all envs).
+    pub env_steps: usize,
+    pub wall_s: f64,
+    /// Seconds in `env.step` (physics), policy/critic forward passes during rollouts, and updates.
+    pub env_s: f64,
+    pub policy_s: f64,
+    pub update_s: f64,
+    /// The last iteration's metrics.
+    pub last: Metrics,
+}
+
+/// The learner's random stream is derived from the master seed, apart from
+/// the network initialisers and the environment's.
+pub fn learner_seed(master: u64) -> u64 {
+    master ^ 0x5eed_1ea7_0000_0001
+}
+
+/// What `checkpoint/trainer.json` holds besides the policy.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct TrainerState {
+    /// Iterations completed when the checkpoint was written.
+    pub iteration: usize,
+    /// The adaptive learning rate at that moment.
+    pub learning_rate: f64,
+    /// Environment control steps taken so far (all envs).
+    pub env_steps: usize,
+    /// Wall-clock seconds of training so far.
+    pub wall_s: f64,
+}
+
+/// The seeds of a run resumed after `iteration` iterations: a fresh stream,
+/// a function of (master seed, iteration) only.
+pub fn resume_seed(master: u64, iteration: usize) -> u64 {
+    learner_seed(master) ^ (iteration as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)
+}
+
+/// Trains a fresh agent on `env` for `config.ppo.iterations` iterations and
+/// writes the results into `out`. `progress`: show a progress bar on stderr.
+pub fn train(config: &Config, task: &str, env: &mut dyn TrainEnv, out: &Path, progress: bool) -> anyhow::Result<TrainSummary> {
+    train_from(config, task, env, out, progress, None)
+}
+
+/// Reads `out/checkpoint/` for `--resume`: the agent and where the run was.
+/// The checkpoint must belong to the same task and configuration (apart
+/// from `ppo.iterations`, which may grow); errors name the folder.
+pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Result<(Agent, TrainerState)> {
+    let dir = out.join("checkpoint");
+    anyhow::ensure!(dir.is_dir(), "{}: no checkpoint to resume from (is `ppo.checkpoint_every` 0?)", dir.display());
+    let loaded = load_training_checkpoint(&dir)?;
+    anyhow::ensure!(
+        loaded.tasks.get(loaded.agent.task).map(String::as_str) == Some(task),
+        "{}: the checkpoint trains task {:?}, not {task:?}",
+        dir.display(),
+        loaded.tasks.get(loaded.agent.task)
+    );
+    let mut saved = loaded.info.config.clone();
+    saved.ppo.iterations = config.ppo.iterations;
+    anyhow::ensure!(
+        &saved == config,
+        "{}: the checkpoint was trained with another configuration than the one given (compare {} with the config file)",
+        dir.display(),
+        out.join("config.toml").display()
+    );
+    let path = dir.join("trainer.json");
+    let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let state: TrainerState = serde_json::from_str(&text).with_context(|| format!("{}: not a trainer state", path.display()))?;
+    anyhow::ensure!(
+        state.iteration <= config.ppo.iterations,
+        "{}: the checkpoint is at iteration {}, past the {} iterations asked for",
+        path.display(),
+        state.iteration,
+        config.ppo.iterations
+    );
+    Ok((loaded.agent, state))
+}
+
+/// Writes `checkpoint/` as a whole: into `checkpoint.new/`, then renamed over
+/// the old one, so a crash leaves the previous checkpoint intact.
+fn save_checkpoint(learner: &PpoLearner, task: &str, info: &PolicyInfo, state: &TrainerState, out: &Path) -> anyhow::Result<()> {
+    let fresh = out.join("checkpoint.new");
+    let old = out.join("checkpoint.old");
+    let dir = out.join("checkpoint");
+    for stale in [&fresh, &old] {
+        if stale.exists() {
+            std::fs::remove_dir_all(stale).with_context(|| format!("removing {}", stale.display()))?;
+        }
+    }
+    save_policy(&learner.agent, &[task.to_string()], info, &fresh)?;
+    write_atomic(&fresh.join("trainer.json"), serde_json::to_string_pretty(state)?.as_bytes())?;
+    if dir.exists() {
+        std::fs::rename(&dir, &old).with_context(|| format!("moving {} aside", dir.display()))?;
+    }
+    std::fs::rename(&fresh, &dir).with_context(|| format!("renaming {} to {}", fresh.display(), dir.display()))?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old).with_context(|| format!("removing {}", old.display()))?;
+    }
+    Ok(())
+}
+
+/// [`train`], or with `resume` (from [`load_resume_point`]) the same run
+/// continued from its checkpoint; `env` must then be seeded with
+/// [`resume_seed`].
+pub fn train_from(
+    config: &Config,
+    task: &str,
+    env: &mut dyn TrainEnv,
+    out: &Path,
+    progress: bool,
+    resume: Option<(Agent, TrainerState)>,
+) -> anyhow::Result<TrainSummary> {
+    let cfg = &config.ppo;
+    cfg.validate()?;
+    write_atomic(&out.join("config.toml"), config.to_toml_string().as_bytes())?;
+    let (mut learner, done, mut log) = match resume {
+        None => {
+            let mut agent = Agent::new(env.dims(), config, config.seed)?;
+            agent.begin_task(0, &[])?;
+            (PpoLearner::new(cfg.clone(), agent, env.num_envs(), learner_seed(config.seed))?, None, String::new())
+        }
+        Some((agent, state)) => {
+            let mut learner = PpoLearner::new(cfg.clone(), agent, env.num_envs(), resume_seed(config.seed, state.iteration))?;
+            learner.iteration = state.iteration;
+            learner.optimizer.set_learning_rate(state.learning_rate);
+            let path = out.join("metrics.jsonl");
+            let text = std::fs::read_to_string(&path).unwrap_or_default();
+            let kept: String = text.lines().take(state.iteration).flat_map(|l| [l, "\n"]).collect();
+            (learner, Some(state), kept)
+        }
+    };
+    let first = done.as_ref().map_or(0, |s| s.iteration);
+
+    let bar = if progress { ProgressBar::new(cfg.iterations as u64) } else { ProgressBar::hidden() };
+    bar.set_position(first as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} it  eta {eta}  {msg}")
+            .expect("a valid progress template")
+            .progress_chars("=> "),
+    );
+    let start = Instant::now();
+    let wall_before = done.as_ref().map_or(0.0, |s| s.wall_s);
+    let mut summary = TrainSummary {
+        iterations: 0,
+        env_steps: done.as_ref().map_or(0, |s| s.env_steps),
+        wall_s: 0.0,
+        env_s: 0.0,
+        policy_s: 0.0,
+        update_s: 0.0,
+        last: Metrics::new(),
+    };
+    let dims = env.dims();
+    let info_at = |iterations: usize| PolicyInfo { config: config.clone(), dims: dims.into(), iterations };
+    for it in first..cfg.iterations {
+        let mut m = learner.train_iteration(env)?;
+        summary.env_steps += cfg.steps_per_env * env.num_envs();
+        m.insert("charts/env_steps".into(), summary.env_steps as f64);
+        m.insert("time/wall_s".into(), wall_before + start.elapsed().as_secs_f64());
+        summary.env_s += m.get("time/env_s").copied().unwrap_or(0.0);
+        summary.policy_s += m.get("time/policy_s").copied().unwrap_or(0.0);
+        summary.update_s += m.get("time/update_s").copied().unwrap_or(0.0);
+        log.push_str(&serde_json::to_string(&m)?);
+        log.push('\n');
+        let last = it + 1 == cfg.iterations;
+        // The last iteration is checkpointed too (before the task ends), so a
+        // finished run can be resumed with a larger `--iterations`.
+        let checkpoint = cfg.checkpoint_every > 0 && ((it + 1) % cfg.checkpoint_every == 0 || last);
+        if last || checkpoint || (it + 1) % METRICS_FLUSH_EVERY == 0 {
+            write_atomic(&out.join("metrics.jsonl"), log.as_bytes())?;
+        }
+        if checkpoint {
+            let state = TrainerState {
+                iteration: it + 1,
+                learning_rate: learner.optimizer.learning_rate(),
+                env_steps: summary.env_steps,
+                wall_s: wall_before + start.elapsed().as_secs_f64(),
+            };
+            save_checkpoint(&learner, task, &info_at(it + 1), &state, out)?;
+        }
+        if cfg.log_every > 0 && (it % cfg.log_every == 0 || last) {
+            let get = |k: &str| m.get(k).copied().unwrap_or(f64::NAN);
+            bar.set_message(format!(
+                "return {:.2}  lin_err {:.2}  fall {:.2}  SPS {:.0}",
+                get("charts/episodic_return"),
+                get("charts/lin_vel_err"),
+                get("charts/fall_rate"),
+                get("charts/SPS")
+            ));
+        }
+        bar.inc(1);
+        summary.last = m;
+    }
+    bar.finish();
+    learner.end_task()?;
+    save_policy(&learner.agent, &[task.to_string()], &info_at(cfg.iterations), &out.join("policy"))?;
+    summary.iterations = cfg.iterations;
+    summary.wall_s = wall_before + start.elapsed().as_secs_f64();
+    Ok(summary)
+}

@@ -1,0 +1,84 @@
+//! `quadcl train --resume`: a run interrupted after a checkpoint goes on from
+//! it, and a checkpoint that does not match is a clear error that leaves the
+//! files as they were.
+
+use quadcl::config::{Config, PpoConfig};
+use quadcl::rl::toy_env::ToyEnv;
+use quadcl::rl::trainer::{load_resume_point, resume_seed, train_from};
+
+fn toy_config(iterations: usize) -> Config {
+    let mut cfg = Config {
+        seed: 9,
+        ppo: PpoConfig {
+            num_envs: 16,
+            steps_per_env: 8,
+            iterations,
+            checkpoint_every: 2,
+            cenet_decoder_hidden: vec![8],
+            cenet_latent_dim: 2,
+            ..PpoConfig::default()
+        },
+        ..Config::default()
+    };
+    cfg.net.actor.hidden = vec![16];
+    cfg.net.critic.hidden = vec![16];
+    cfg.net.cenet.hidden = vec![8];
+    cfg
+}
+
+fn metric_rows(dir: &std::path::Path) -> Vec<serde_json::Value> {
+    let text = std::fs::read_to_string(dir.join("metrics.jsonl")).unwrap();
+    text.lines().map(|l| serde_json::from_str(l).unwrap()).collect()
+}
+
+#[test]
+fn a_resumed_run_goes_on_from_its_last_checkpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    // Stopped after 5 iterations (checkpoints at 2, 4 and the last, 5), then
+    // the 5th row and checkpoint dropped as if interrupted after the 4th.
+    let first = toy_config(4);
+    let mut env = ToyEnv::new(16, 10, first.seed);
+    train_from(&first, "none", &mut env, dir.path(), false, None).unwrap();
+    let before = metric_rows(dir.path());
+    assert_eq!(before.len(), 4);
+
+    let longer = toy_config(8);
+    let (agent, state) = load_resume_point(&longer, "none", dir.path()).unwrap();
+    assert_eq!(state.iteration, 4);
+    assert!(!agent.recall && agent.actor.current_task() == Some(0), "the task must still be in training");
+    let mut env = ToyEnv::new(16, 10, resume_seed(longer.seed, state.iteration));
+    let summary = train_from(&longer, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
+    assert_eq!(summary.iterations, 8);
+
+    let after = metric_rows(dir.path());
+    assert_eq!(after.len(), 8, "rows after the checkpoint are replaced, not duplicated");
+    assert_eq!(after[..4], before[..4], "rows up to the checkpoint are kept as they were");
+    let iterations: Vec<f64> = after.iter().map(|r| r["charts/iteration"].as_f64().unwrap()).collect();
+    assert_eq!(iterations, (1..=8).map(f64::from).collect::<Vec<_>>());
+    assert!(dir.path().join("policy").join("manifest.json").is_file());
+    assert!(!dir.path().join("checkpoint.new").exists() && !dir.path().join("checkpoint.old").exists());
+}
+
+#[test]
+fn resuming_with_another_config_or_task_is_an_error_that_changes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = toy_config(3);
+    let mut env = ToyEnv::new(16, 10, cfg.seed);
+    train_from(&cfg, "none", &mut env, dir.path(), false, None).unwrap();
+    let snapshot = std::fs::read(dir.path().join("checkpoint").join("model.safetensors")).unwrap();
+
+    let mut other = toy_config(6);
+    other.ppo.entropy_coef = 0.5;
+    let err = format!("{:#}", load_resume_point(&other, "none", dir.path()).unwrap_err());
+    assert!(err.contains("checkpoint") && err.contains("another configuration"), "{err}");
+    let err = format!("{:#}", load_resume_point(&toy_config(6), "crash:FL", dir.path()).unwrap_err());
+    assert!(err.contains("not \"crash:FL\""), "{err}");
+
+    std::fs::write(dir.path().join("checkpoint").join("trainer.json"), "{ not json").unwrap();
+    let err = format!("{:#}", load_resume_point(&toy_config(6), "none", dir.path()).unwrap_err());
+    assert!(err.contains("trainer.json"), "{err}");
+    assert_eq!(std::fs::read(dir.path().join("checkpoint").join("model.safetensors")).unwrap(), snapshot);
+
+    let finished = format!("{:#}", quadcl::rl::policy_dir::load_training_checkpoint(&dir.path().join("policy")).unwrap_err());
+    assert!(finished.contains("not a checkpoint of a run in progress"), "{finished}");
+}
