@@ -20,6 +20,8 @@ pub enum Command {
     Bench(crate::cmd::bench::BenchArgs),
     /// Per network, layer and task: selected, vacant, occupied and private parameter counts.
     Masks(crate::cmd::masks::MasksArgs),
+    /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
+    Run(crate::cmd::run::RunArgs),
 }
 
 /// Runs the chosen subcommand. Without one, says what there is to run.
@@ -27,6 +29,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Bench(args)) => crate::cmd::bench::run(args),
         Some(Command::Masks(args)) => crate::cmd::masks::run(args),
+        Some(Command::Run(args)) => crate::cmd::run::run(args),
         None => {
             crate::cmd::welcome::run();
             Ok(())

@@ -2,4 +2,5 @@
 
 pub mod bench;
 pub mod masks;
+pub mod run;
 pub mod welcome;
