@@ -219,3 +219,61 @@ fn different_envs_in_a_batch_get_different_randomisation() {
     let row = &envs.privileged_observations()[obs::PRIV_PHYSICS..obs::PRIV_PHYSICS + 3];
     assert_eq!(row, [p[0].friction, p[0].added_mass, p[0].motor_strength]);
 }
+
+#[test]
+fn joint_limits_and_effort_limits_from_the_urdf_hold() {
+    let cfg = quiet_config();
+    let robot = robot();
+    let mut env = LocomotionEnv::new(&cfg, &robot, &Perturbation::none()).unwrap();
+    // Drive every calf far past its upper limit (-0.916 rad) and every thigh far back.
+    let mut action = [0.0; ACT_DIM];
+    for leg in 0..4 {
+        action[3 * leg + 1] = -cfg.clip_actions;
+        action[3 * leg + 2] = cfg.clip_actions;
+    }
+    let mut saturated = false;
+    for k in 0..50 {
+        if k == 25 {
+            // Then swing the thighs from their lower limit to far forward: a
+            // 4 rad error asks for about 87 N m, more than the 55 N m effort limit.
+            for leg in 0..4 {
+                action[3 * leg + 1] = cfg.clip_actions;
+            }
+        }
+        env.step(&action).unwrap();
+        // Limits push back once violated: a few hundredths of a radian over at
+        // impacts (one solver iteration), held at the end.
+        let tolerance = if k < 49 { 0.1 } else { 0.03 };
+        for (i, joint) in robot.joints.iter().enumerate() {
+            let q = env.raw_state().q[i];
+            assert!(
+                q >= joint.lower - tolerance && q <= joint.upper + tolerance,
+                "step {k}: {} at {q}, limits {}..{}",
+                joint.name,
+                joint.lower,
+                joint.upper
+            );
+            let tau = env.torques()[i];
+            assert!(tau.abs() <= joint.effort + 1e-4, "{} torque {tau} above effort {}", joint.name, joint.effort);
+            saturated |= (tau.abs() - joint.effort).abs() < 1e-4;
+        }
+    }
+    assert!(saturated, "the thigh swing should saturate some motor");
+}
+
+#[test]
+fn non_finite_physics_is_an_error_naming_the_env_step_and_quantity() {
+    let mut env = LocomotionEnv::new(&quiet_config(), &robot(), &Perturbation::none()).unwrap();
+    env.step(&[0.0; ACT_DIM]).unwrap();
+    env.push([f32::NAN, 0.0]);
+    let err = format!("{:#}", env.step(&[0.0; ACT_DIM]).unwrap_err());
+    assert!(err.contains("env 0") && err.contains("step 2"), "{err}");
+    assert!(err.contains("non-finite") || err.contains("rapier failed"), "{err}");
+}
+
+#[test]
+fn a_meaningless_config_is_an_error_not_a_panic() {
+    let cfg = EnvConfig { kd: f32::INFINITY, ..quiet_config() };
+    let err = format!("{:#}", LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).err().unwrap());
+    assert!(err.contains("env.kd"), "{err}");
+}

@@ -62,6 +62,9 @@ fn bad_number_is_an_error_naming_the_file_and_the_value() {
     assert!(err.contains("bad_number.urdf"), "{err}");
     assert!(err.contains("bad number") && err.contains("4.7x13") && err.contains("line 11"), "{err}");
 
+    let err = load_err("nan_inertia.urdf", &a1_text().replacen("ixx=\"0.019886\"", "ixx=\"NaN\"", 1));
+    assert!(err.contains("nan_inertia.urdf") && err.contains("bad number") && err.contains("trunk"), "{err}");
+
     let err = load_err("bad_effort.urdf", &a1_text().replacen("effort=\"55\"", "effort=\"-55\"", 1));
     assert!(err.contains("bad_effort.urdf") && err.contains("FL_thigh_joint") && err.contains("effort"), "{err}");
 }
@@ -92,4 +95,38 @@ fn a_mesh_it_cannot_load_is_skipped_not_fatal() {
     let dir = tempfile::tempdir().unwrap();
     let robot = RobotModel::load(&write(&dir, "mesh.urdf", &text)).unwrap();
     assert_eq!(robot.urdf.links[robot.trunk_link].collision.len(), 1);
+}
+
+/// The A1 with each foot as its own link on a fixed joint (as Unitree's own URDF has it).
+fn a1_with_foot_links() -> String {
+    let mut text = a1_text();
+    for leg in ["FL", "FR", "RL", "RR"] {
+        let sphere = "    <collision>\n      <origin xyz=\"0 0 -0.2\" rpy=\"0 0 0\"/>\n      <geometry><sphere radius=\"0.02\"/></geometry>\n    </collision>\n";
+        let calf_start = text.find(&format!("<link name=\"{leg}_calf\">")).unwrap();
+        let at = calf_start + text[calf_start..].find(sphere).unwrap();
+        text.replace_range(at..at + sphere.len(), "");
+        let end = calf_start + text[calf_start..].find("</link>").unwrap() + "</link>".len();
+        let foot = format!(
+            "\n  <joint name=\"{leg}_foot_fixed\" type=\"fixed\">\n    <origin xyz=\"0 0 -0.2\" rpy=\"0 0 0\"/>\n    <parent link=\"{leg}_calf\"/>\n    <child link=\"{leg}_foot\"/>\n  </joint>\n  <link name=\"{leg}_foot\">\n    <inertial><mass value=\"0.06\"/><inertia ixx=\"1e-5\" ixy=\"0\" ixz=\"0\" iyy=\"1e-5\" iyz=\"0\" izz=\"1e-5\"/></inertial>\n    <collision><geometry><sphere radius=\"0.02\"/></geometry></collision>\n  </link>"
+        );
+        text.insert_str(end, &foot);
+    }
+    text
+}
+
+#[test]
+fn feet_on_fixed_links_are_found_and_touch_the_ground() {
+    use quadcl::config::EnvConfig;
+    use quadcl::sim::{obs, LocomotionEnv, Perturbation, ACT_DIM};
+    let dir = tempfile::tempdir().unwrap();
+    let robot = RobotModel::load(&write(&dir, "feet.urdf", &a1_with_foot_links())).unwrap();
+    assert_eq!(robot.foot_offsets, [[0.0, 0.0, -0.2]; 4]);
+    assert_eq!(robot.foot_radius, [0.02; 4]);
+    let cfg = EnvConfig { randomize: false, push_interval_s: 0.0, ..EnvConfig::default() };
+    let mut env = LocomotionEnv::new(&cfg, &robot, &Perturbation::none()).unwrap();
+    for _ in 0..100 {
+        assert!(!env.step(&[0.0; ACT_DIM]).unwrap().terminated);
+    }
+    let contacts = &env.privileged_observation()[obs::PRIV_FOOT_CONTACTS..obs::PRIV_FOOT_CONTACTS + 4];
+    assert_eq!(contacts, [1.0; 4]);
 }

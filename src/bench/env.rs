@@ -57,7 +57,7 @@ fn one_env_rate(cfg: &EnvConfig, robot: &RobotModel, actions: &[f32], seconds: f
 /// Adds the environment figures to `report`.
 pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Value>) -> anyhow::Result<()> {
     let cfg = EnvConfig::default();
-    let robot = RobotModel::a1()?;
+    let robot = RobotModel::for_config(&cfg)?;
     let task = Perturbation::none();
     let actions = gait_actions(cfg.policy_dt());
 

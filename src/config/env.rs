@@ -194,7 +194,12 @@ impl EnvConfig {
         ] {
             anyhow::ensure!(r[0] <= r[1], "env.{name} must be [low, high] with low <= high, got {r:?}");
         }
-        anyhow::ensure!(self.noise_std >= 0.0, "env.noise_std must be >= 0");
+        anyhow::ensure!(self.noise_std >= 0.0 && self.noise_std.is_finite(), "env.noise_std must be finite and >= 0, got {}", self.noise_std);
+        for (name, v) in [("kp", self.kp), ("kd", self.kd), ("action_scale", self.action_scale), ("clip_actions", self.clip_actions)] {
+            anyhow::ensure!(v.is_finite() && v >= 0.0, "env.{name} must be finite and >= 0, got {v}");
+        }
+        anyhow::ensure!(self.kp > 0.0, "env.kp must be > 0 (the PD spring), got {}", self.kp);
+        anyhow::ensure!(self.start_height.is_finite() && self.start_height > 0.0, "env.start_height must be > 0, got {}", self.start_height);
         Ok(())
     }
 }

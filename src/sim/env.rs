@@ -2,7 +2,8 @@
 //! step(action) -> Step, legged_gym conventions (DESIGN.md, "The environment").
 //!
 //! A policy step: clip the action (ACT_DIM,), apply the task perturbation,
-//! set PD targets = default + action_scale * action, run `decimation`
+//! set PD targets = default + action_scale * action (clamped to the joint
+//! range), run `decimation`
 //! physics steps, then read the state, compute the Table 1 reward, check
 //! termination (trunk contact or tilt) and time-out, resample the command
 //! every `command_resample_s`, push every `push_interval_s`, and build the
@@ -11,7 +12,8 @@
 
 use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::physics::{PhysicsParams, RawState, RobotSim};
-use super::reward::{self, RewardInput, RewardTerms, NUM_TERMS};
+use super::episode::{EpisodeStats, Step};
+use super::reward::{self, RewardInput};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
 use crate::config::EnvConfig;
@@ -22,38 +24,6 @@ use std::sync::Arc;
 
 /// How long a push shows in the privileged observation, seconds.
 const PUSH_STATE_HOLD_S: f32 = 1.0;
-
-/// What one policy step returns.
-#[derive(Debug, Clone)]
-pub struct Step {
-    /// Sum of the reward terms.
-    pub reward: f32,
-    /// Each term's contribution.
-    pub terms: RewardTerms,
-    /// Fell (trunk contact or tilt): no bootstrap.
-    pub terminated: bool,
-    /// Episode time-out: bootstrap.
-    pub truncated: bool,
-    /// The finished episode's summary when terminated or truncated.
-    pub finished: Option<EpisodeSummary>,
-}
-
-/// Summary of one finished episode.
-#[derive(Debug, Clone, PartialEq)]
-pub struct EpisodeSummary {
-    /// Sum of step rewards.
-    pub episode_return: f32,
-    /// Simulated seconds.
-    pub length_s: f32,
-    /// Mean |v_xy - v_xy_cmd| over the steps, m/s.
-    pub lin_vel_err: f32,
-    /// Mean |w_z - w_z_cmd| over the steps, rad/s.
-    pub ang_vel_err: f32,
-    /// Whether it ended by falling.
-    pub fell: bool,
-    /// Sum of each reward term over the episode, in `reward::TERM_NAMES` order.
-    pub term_sums: [f32; NUM_TERMS],
-}
 
 /// One simulated quadruped with its task.
 pub struct LocomotionEnv {
@@ -79,11 +49,7 @@ pub struct LocomotionEnv {
     obs: [f32; OBS_DIM],
     priv_obs: [f32; PRIV_OBS_DIM],
     history: Vec<f32>,
-    // Episode accumulators.
-    ep_return: f32,
-    ep_lin_err: f32,
-    ep_ang_err: f32,
-    ep_terms: [f32; NUM_TERMS],
+    episode: EpisodeStats,
 }
 
 impl LocomotionEnv {
@@ -122,10 +88,7 @@ impl LocomotionEnv {
             obs: [0.0; OBS_DIM],
             priv_obs: [0.0; PRIV_OBS_DIM],
             history: vec![0.0; HISTORY_LEN * OBS_DIM],
-            ep_return: 0.0,
-            ep_lin_err: 0.0,
-            ep_ang_err: 0.0,
-            ep_terms: [0.0; NUM_TERMS],
+            episode: EpisodeStats::default(),
         };
         env.reset(0)?;
         Ok(env)
@@ -159,10 +122,7 @@ impl LocomotionEnv {
         self.last_action = [0.0; 12];
         self.state = self.sim.state();
         self.foot_contacts = [false; 4];
-        self.ep_return = 0.0;
-        self.ep_lin_err = 0.0;
-        self.ep_ang_err = 0.0;
-        self.ep_terms = [0.0; NUM_TERMS];
+        self.episode = EpisodeStats::default();
         self.write_observations();
         for k in 0..HISTORY_LEN {
             self.history[k * OBS_DIM..(k + 1) * OBS_DIM].copy_from_slice(&self.obs);
@@ -216,6 +176,11 @@ impl LocomotionEnv {
         self.sim.targets()
     }
 
+    /// The PD torques (clamped to the effort limits) at the start of the last physics step, N m.
+    pub fn torques(&self) -> &[f32; 12] {
+        self.sim.last_torques()
+    }
+
     /// The task perturbation.
     pub fn task(&self) -> &Perturbation {
         &self.task
@@ -247,12 +212,25 @@ impl LocomotionEnv {
         let policy_action: [f32; 12] = std::array::from_fn(|i| action[i].clamp(-clip, clip));
         let mut applied = policy_action;
         self.task.apply(&mut applied, c.noise_std, &mut self.rng);
-        let targets: [f32; 12] = std::array::from_fn(|i| self.default_q[i] + c.action_scale * applied[i]);
+        // Targets stay inside the joint range, so the PD spring never pulls a joint
+        // into its limit (rapier's limits only push back once violated).
+        let targets: [f32; 12] = std::array::from_fn(|i| {
+            let joint = &self.robot.joints[i];
+            (self.default_q[i] + c.action_scale * applied[i]).clamp(joint.lower, joint.upper)
+        });
         self.sim.set_targets(&targets);
 
         let prev = self.state;
-        for _ in 0..c.decimation {
-            self.sim.step();
+        for substep in 0..c.decimation {
+            self.sim.step().with_context(|| {
+                format!(
+                    "env {}: physics step {substep} of policy step {} (episode step {}, task {})",
+                    self.env_index,
+                    self.total_steps + 1,
+                    self.episode_step + 1,
+                    self.task
+                )
+            })?;
         }
         let state = self.sim.state();
         self.check_finite(&state)?;
@@ -289,12 +267,7 @@ impl LocomotionEnv {
         };
         let terms = reward::compute(&input, c);
         let step_reward = terms.total();
-        self.ep_return += step_reward;
-        for (sum, v) in self.ep_terms.iter_mut().zip(terms.values) {
-            *sum += v;
-        }
-        self.ep_lin_err += ((lin_vel[0] - self.command[0]).powi(2) + (lin_vel[1] - self.command[1]).powi(2)).sqrt();
-        self.ep_ang_err += (ang_vel[2] - self.command[2]).abs();
+        self.episode.add(&terms, lin_vel, ang_vel, self.command);
 
         let tilted = gravity[2] > -c.max_tilt_rad.cos();
         let terminated = trunk_contact || tilted;
@@ -324,17 +297,7 @@ impl LocomotionEnv {
         self.history.copy_within(OBS_DIM.., 0);
         self.history[(HISTORY_LEN - 1) * OBS_DIM..].copy_from_slice(&self.obs);
 
-        let finished = (terminated || truncated).then(|| {
-            let n = self.episode_step as f32;
-            EpisodeSummary {
-                episode_return: self.ep_return,
-                length_s: n * dt,
-                lin_vel_err: self.ep_lin_err / n,
-                ang_vel_err: self.ep_ang_err / n,
-                fell: terminated,
-                term_sums: self.ep_terms,
-            }
-        });
+        let finished = (terminated || truncated).then(|| self.episode.summary(self.env_index, self.episode_step, dt, terminated));
         Ok(Step { reward: step_reward, terms, terminated, truncated, finished })
     }
 

@@ -6,10 +6,12 @@
 //! - [`tasks`]: leg perturbations (crash / invert / noise) and their syntax.
 //! - [`obs`]: observation and privileged-observation layouts.
 //! - [`reward`]: the paper's Table 1, one function per term.
-//! - [`env`]: `LocomotionEnv`, reset(seed) / step(action).
+//! - [`env`](mod@env): `LocomotionEnv`, reset(seed) / step(action).
+//! - [`episode`]: the step result and the finished-episode summary.
 //! - [`vec_env`]: a batch of envs stepped in parallel with rayon.
 
 pub mod env;
+pub mod episode;
 pub mod obs;
 pub mod physics;
 pub mod reward;
@@ -18,7 +20,8 @@ pub mod tasks;
 pub mod terrain;
 pub mod vec_env;
 
-pub use env::{EpisodeSummary, LocomotionEnv, Step};
+pub use env::LocomotionEnv;
+pub use episode::{EpisodeSummary, Step};
 pub use obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_BASE_LIN_VEL, PRIV_OBS_DIM};
 pub use robot::{Leg, RobotModel};
 pub use tasks::{Perturbation, PerturbationKind};

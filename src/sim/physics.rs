@@ -3,11 +3,13 @@
 //! and the state read back in the quantities the environment needs.
 //!
 //! rapier3d-urdf ignores effort limits and resets joints to zero, so the
-//! standing pose is applied after insertion and every motor is force-based
-//! (PD in N m / rad) with its max force set to the joint's effort limit
-//! (times the episode's motor strength). Only robot-ground contacts exist:
-//! robot colliders are in group 1 and see only group 2 (the ground), and
-//! self contacts are disabled. Bodies never sleep (determinism).
+//! standing pose is applied after insertion, and the PD law (Kp, Kd in
+//! N m / rad, times the episode's motor strength, clamped to each joint's
+//! effort limit) is applied here as rapier's implicit joint spring and
+//! damping rather than as solver motors (see [`RobotSim::step`]). Only
+//! robot-ground contacts exist: robot colliders are in group 1 and see only
+//! group 2 (the ground), and self contacts are disabled. Bodies never sleep
+//! (determinism).
 
 use super::robot::{Leg, RobotModel, NUM_LEGS};
 use super::terrain;
@@ -15,6 +17,11 @@ use crate::config::EnvConfig;
 use rapier3d::math::{Pose, Vector};
 use rapier3d::prelude::*;
 use rapier3d_urdf::{UrdfLoaderOptions, UrdfMultibodyOptions, UrdfRobot};
+
+/// Stiffness of the speculative joint stop, N m / rad: dt^2 * k (1 at 0.01 s)
+/// dwarfs any leg's inertia about its joint (< 0.1 kg m^2), so the joint stops
+/// at the limit within the step.
+const LIMIT_STIFFNESS: f32 = 1.0e4;
 
 /// Group of robot colliders.
 const ROBOT_GROUP: Group = Group::GROUP_1;
@@ -65,6 +72,8 @@ pub struct RobotSim {
     calf_links: [usize; NUM_LEGS],
     foot_offsets: [[f32; 3]; NUM_LEGS],
     effort: [f32; 12],
+    /// (lower, upper) position limit of each leg joint, rad.
+    limits: [[f32; 2]; 12],
     /// (collider, part) of every robot collider.
     parts: Vec<(ColliderHandle, Part)>,
     ground: ColliderHandle,
@@ -165,6 +174,7 @@ impl RobotSim {
         }
 
         let effort: [f32; 12] = std::array::from_fn(|i| robot.joints[i].effort);
+        let limits: [[f32; 2]; 12] = std::array::from_fn(|i| [robot.joints[i].lower, robot.joints[i].upper]);
         let mut sim = Self {
             world,
             multibody,
@@ -172,6 +182,7 @@ impl RobotSim {
             calf_links,
             foot_offsets: robot.foot_offsets,
             effort,
+            limits,
             parts,
             ground,
             kp,
@@ -246,10 +257,18 @@ impl RobotSim {
     /// Kd as implicit joint damping (both stable at any step). Where the PD
     /// torque at the step's start would exceed the effort limit, the spring's
     /// rest point is moved so that it asks for exactly the limit.
-    pub fn step(&mut self) {
+    ///
+    /// Joint limits are made speculative the same way: rapier's own limit
+    /// constraint only acts once a joint is past its limit, so a fast joint
+    /// overshoots by up to velocity * dt (0.1 rad at 0.01 s). A joint that
+    /// would cross a limit within this step instead gets, for this step, a
+    /// very stiff implicit spring resting on the limit: a mechanical stop.
+    pub fn step(&mut self) -> anyhow::Result<()> {
         let (kp, kd) = (self.kp * self.strength, self.kd * self.strength);
+        let dt = self.world.integration_parameters.dt;
         let links = self.joint_links;
         let targets = self.targets;
+        let limits = self.limits;
         let effort = self.effort.map(|e| e * self.strength);
         let mb = self.world.multibody_joints.get_multibody_mut(self.multibody).expect("robot multibody exists");
         for (i, &id) in links.iter().enumerate() {
@@ -257,11 +276,29 @@ impl RobotSim {
             let q = link.joint.coords()[3];
             let qd = mb.joint_velocity(link)[0];
             let tau = kp * (targets[i] - q) - kd * qd;
-            let rest = if tau.abs() <= effort[i] { targets[i] } else { q + (effort[i].copysign(tau) + kd * qd) / kp };
             self.last_torques[i] = tau.clamp(-effort[i], effort[i]);
-            mb.link_mut(id).expect("leg link exists").joint.set_spring(3, kp, rest);
+            let predicted = q + qd * dt;
+            let (stiffness, rest) = if predicted > limits[i][1] {
+                (LIMIT_STIFFNESS, limits[i][1])
+            } else if predicted < limits[i][0] {
+                (LIMIT_STIFFNESS, limits[i][0])
+            } else if tau.abs() <= effort[i] {
+                (kp, targets[i])
+            } else {
+                (kp, q + (effort[i].copysign(tau) + kd * qd) / kp)
+            };
+            mb.link_mut(id).expect("leg link exists").joint.set_spring(3, stiffness, rest);
         }
-        self.world.step();
+        // rapier may panic on non-finite state (e.g. a NaN bounding box); turn that
+        // into an error the env reports with its context.
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.world.step())).map_err(|payload| {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            anyhow::anyhow!("rapier failed inside a physics step: {what}")
+        })
     }
 
     /// Reads the robot state.

@@ -100,6 +100,17 @@ impl RobotModel {
         Self::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/a1.urdf"))
     }
 
+    /// Loads the description named by `cfg.urdf`: an absolute path, a path
+    /// relative to the working directory, or else relative to the crate root.
+    pub fn for_config(cfg: &crate::config::EnvConfig) -> anyhow::Result<Self> {
+        let path = Path::new(&cfg.urdf);
+        if path.is_absolute() || path.exists() {
+            Self::load(path)
+        } else {
+            Self::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(path))
+        }
+    }
+
     /// Reads and validates a URDF file. Errors name the file and the problem.
     pub fn load(path: &Path) -> anyhow::Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading robot description {}", path.display()))?;
@@ -149,7 +160,19 @@ impl RobotModel {
         for link in &urdf.links {
             let m = link.inertial.mass.value;
             if !m.is_finite() || m < 0.0 {
-                bail!("link '{}' has a bad mass: {m}", link.name);
+                bail!("bad number: link '{}' has mass {m} (must be finite and >= 0)", link.name);
+            }
+            let i = &link.inertial.inertia;
+            if [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz].iter().any(|v| !v.is_finite()) || i.ixx < 0.0 || i.iyy < 0.0 || i.izz < 0.0 {
+                bail!("bad number: link '{}' has inertia {:?}", link.name, [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz]);
+            }
+        }
+        if urdf.links[trunk_link].inertial.mass.value <= 0.0 {
+            bail!("trunk link '{}' has no mass", urdf.links[trunk_link].name);
+        }
+        for joint in &urdf.joints {
+            if joint.origin.xyz.0.iter().chain(joint.origin.rpy.0.iter()).any(|v| !v.is_finite()) {
+                bail!("bad number: joint '{}' has origin xyz {:?} rpy {:?}", joint.name, joint.origin.xyz.0, joint.origin.rpy.0);
             }
         }
         Ok(Self { path: path.to_path_buf(), urdf, trunk_link, joints, foot_offsets, foot_radius })

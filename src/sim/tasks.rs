@@ -180,6 +180,19 @@ mod tests {
     }
 
     #[test]
+    fn configs_name_tasks_with_the_same_syntax() {
+        #[derive(serde::Serialize, serde::Deserialize)]
+        struct Sequence {
+            tasks: Vec<Perturbation>,
+        }
+        let seq: Sequence = toml::from_str("tasks = [\"none\", \"noise:FR+invert:RR\"]").unwrap();
+        assert_eq!(seq.tasks[1].to_string(), "invert:RR+noise:FR");
+        assert_eq!(toml::to_string(&seq).unwrap().trim(), "tasks = [\"none\", \"invert:RR+noise:FR\"]");
+        let err = toml::from_str::<Sequence>("tasks = [\"crash:XL\"]").err().unwrap().to_string();
+        assert!(err.contains("unknown leg 'XL'") && err.contains("FL, FR, RL, RR"), "{err}");
+    }
+
+    #[test]
     fn apply_touches_only_the_named_legs() {
         let p: Perturbation = "crash:FL+invert:RR".parse().unwrap();
         let mut a: Vec<f32> = (1..=12).map(|x| x as f32).collect();

@@ -7,7 +7,8 @@
 //! Buffers are row-major: observations (num_envs, OBS_DIM), privileged
 //! observations (num_envs, PRIV_OBS_DIM), histories (num_envs, HISTORY_LEN * OBS_DIM).
 
-use super::env::{EpisodeSummary, LocomotionEnv};
+use super::env::LocomotionEnv;
+use super::episode::{EpisodeSummary, Step};
 use super::obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
@@ -117,7 +118,7 @@ impl VecEnv {
         if actions.len() != n * ACT_DIM {
             bail!("VecEnv::step: {} actions for {n} envs, expected {} ({n} x {ACT_DIM})", actions.len(), n * ACT_DIM);
         }
-        let results: Vec<anyhow::Result<(super::env::Step, [f32; OBS_DIM])>> = self
+        let results: Vec<anyhow::Result<(Step, [f32; OBS_DIM])>> = self
             .envs
             .par_iter_mut()
             .zip(actions.par_chunks(ACT_DIM))
