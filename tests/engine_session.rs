@@ -163,3 +163,16 @@ fn the_toy_learner_learns_within_a_task() {
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     assert!(mean(&p[50..]) > mean(&p[..10]) + 0.05, "{p:?}");
 }
+
+#[test]
+fn a_transfer_change_applies_to_the_next_task_only() {
+    let mut s = session(THREE);
+    let err = s.set_next_transfer(vec!["invert:RR".into()], quadcl::cl::sequence::TransferInit::Related).unwrap_err();
+    assert!(err.to_string().contains("not been learned"), "{err}");
+    s.train_next_task().unwrap();
+    s.set_next_transfer(vec!["crash:FL".into()], quadcl::cl::sequence::TransferInit::Related).unwrap();
+    s.run(&mut |_| Ok(())).unwrap();
+    let steps = &s.results().steps;
+    assert_eq!(steps[1].related, vec![0]);
+    assert!(steps[2].related.is_empty(), "the sequence entry applies again");
+}

@@ -6,6 +6,7 @@
 
 use super::learner::{Evaluation, Metrics};
 use crate::cl::ours::{SwitchOverrides, Switches};
+use crate::cl::sequence::TransferInit;
 use crate::nn::stats::MaskReport;
 use crate::nn::TaskId;
 use serde::Serialize;
@@ -30,6 +31,8 @@ pub enum Event {
     Resumed { step: usize, iteration: usize },
     /// Switch changes were queued for the next task to start.
     SwitchesQueued { overrides: SwitchOverrides },
+    /// Related tasks / init mode were queued for the next task to start.
+    TransferQueued { related: Vec<String>, init: TransferInit },
     /// Every step of the sequence is done.
     SequenceFinished { steps: usize },
 }
@@ -48,6 +51,8 @@ pub enum Command {
     Resume,
     /// Change switches for the next task to start (not the one in progress).
     SetNextSwitches(SwitchOverrides),
+    /// Change the next task's related tasks and initialisation (METHOD.md 2.6).
+    SetNextTransfer { related: Vec<String>, init: TransferInit },
 }
 
 /// The sending end of a session's command channel.

@@ -70,6 +70,8 @@ pub struct Session {
     finished: Vec<bool>,
     in_progress: Option<InProgress>,
     queued: SwitchOverrides,
+    /// Related tasks and init mode for the next task, replacing its sequence entry's.
+    queued_transfer: Option<(Vec<String>, TransferInit)>,
     paused: bool,
     observers: Vec<Box<dyn Observer>>,
     commands: Receiver<Command>,
@@ -109,6 +111,7 @@ impl Session {
             seed,
             in_progress: None,
             queued: SwitchOverrides::default(),
+            queued_transfer: None,
             paused: false,
             observers: Vec::new(),
             commands,
@@ -246,6 +249,24 @@ impl Session {
         Ok(())
     }
 
+    /// Replaces the next task's related tasks and initialisation (METHOD.md 2.6).
+    /// The related tasks must be learned already (checked now). Ignored if the next
+    /// task is a repeat (fine-tuning has no initialisation).
+    pub fn set_next_transfer(&mut self, related: Vec<String>, init: TransferInit) -> anyhow::Result<()> {
+        for name in &related {
+            let id = self.results.tasks.iter().position(|t| t == name);
+            anyhow::ensure!(id.is_some_and(|t| self.finished[t]), "related task {name:?} has not been learned (learned: {:?})", self.learned_names());
+        }
+        anyhow::ensure!(init != TransferInit::Random || !related.is_empty(), "init = random draws as many tasks as are named, and none is");
+        self.emit(Event::TransferQueued { related: related.clone(), init });
+        self.queued_transfer = Some((related, init));
+        Ok(())
+    }
+
+    fn learned_names(&self) -> Vec<String> {
+        (0..self.finished.len()).filter(|&t| self.finished[t]).map(|t| self.results.tasks[t].clone()).collect()
+    }
+
     fn position(&self) -> (usize, usize) {
         self.in_progress.as_ref().map_or((self.completed_steps(), 0), |p| (p.record.step, p.iteration))
     }
@@ -262,6 +283,7 @@ impl Session {
                 Command::Pause => self.pause(),
                 Command::Resume => self.resume(),
                 Command::SetNextSwitches(o) => self.set_next_switches(o)?,
+                Command::SetNextTransfer { related, init } => self.set_next_transfer(related, init)?,
             }
         }
         Ok(())
@@ -323,7 +345,8 @@ impl Session {
         let mask = self.method.task_mask_config(&self.base_mask, &switches)?;
         let fine_tune = self.finished[task];
         let seed = derive_seed(self.seed, TRAIN_SEED, step as u64);
-        let related = if fine_tune { Vec::new() } else { self.resolve_related(&spec.related, spec.init, task, seed)? };
+        let (related_names, init) = self.queued_transfer.take().unwrap_or((spec.related.clone(), spec.init));
+        let related = if fine_tune { Vec::new() } else { self.resolve_related(&related_names, init, task, seed)? };
         let start = TaskStart { step, task, name: spec.name.clone(), related: related.clone(), mask, iterations: self.sequence.iterations_of(step), seed };
         self.learner.begin_task(&start)?;
         self.method.on_task_start(task, &spec.name)?;
