@@ -29,9 +29,11 @@ pub fn make_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<St
     }
 }
 
-/// One line per task-level event, kept for `log.txt`.
+/// One line per task-level event, kept for `log.txt` (and echoed to stderr
+/// when there is no progress bar, e.g. under nohup).
 struct LogObserver {
     lines: Arc<Mutex<String>>,
+    echo: bool,
 }
 
 impl Observer for LogObserver {
@@ -44,6 +46,9 @@ impl Observer for LogObserver {
             ),
             other => serde_json::to_string(other).unwrap_or_default(),
         };
+        if self.echo {
+            eprintln!("{line}");
+        }
         if let Ok(mut l) = self.lines.lock() {
             l.push_str(&line);
             l.push('\n');
@@ -121,7 +126,7 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
     }
 
     let lines = Arc::new(Mutex::new(dir.read_log()));
-    session.add_observer(Box::new(LogObserver { lines: lines.clone() }));
+    session.add_observer(Box::new(LogObserver { lines: lines.clone(), echo: !progress }));
     let total_iterations: usize = (0..total_steps).map(|i| cfg.sequence.iterations_of(i)).sum();
     let done_iterations: usize = (0..session.completed_steps()).map(|i| cfg.sequence.iterations_of(i)).sum();
     let bar = if progress { ProgressBar::new(total_iterations as u64) } else { ProgressBar::hidden() };
