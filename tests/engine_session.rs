@@ -176,3 +176,19 @@ fn a_transfer_change_applies_to_the_next_task_only() {
     assert_eq!(steps[1].related, vec![0]);
     assert!(steps[2].related.is_empty(), "the sequence entry applies again");
 }
+
+#[test]
+fn mask_settings_cannot_change_while_a_task_is_in_progress() {
+    use quadcl::config::net::Activation;
+    use quadcl::nn::MaskedMlp;
+    let mut net = MaskedMlp::new("n", &[4, 8, 2], Activation::Elu, &MaskConfig::default(), 1).unwrap();
+    let wider = MaskConfig { capacity: 0.5, ..MaskConfig::default() };
+    net.set_mask_config(&wider).unwrap();
+    assert_eq!(net.mask_config().capacity, 0.5);
+    assert!(net.layers().iter().all(|l| l.rule() == wider.rule));
+    net.begin_task(0, &[]).unwrap();
+    let err = net.set_mask_config(&MaskConfig::default()).unwrap_err().to_string();
+    assert!(err.contains("in progress"), "{err}");
+    assert_eq!(net.mask_config().capacity, 0.5);
+    assert!(net.set_mask_config(&MaskConfig { capacity: 3.0, ..MaskConfig::default() }).is_err());
+}
