@@ -1,8 +1,13 @@
-//! The `quadcl` binary: parse the command line and dispatch.
+//! The `quadcl` binary: parse the command line, show the library's warnings
+//! on stderr, and dispatch.
+
+mod stderr_log;
 
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
+    // Only fails if a subscriber is already set, which nothing else does.
+    let _ = tracing::subscriber::set_global_default(stderr_log::StderrLog::new(std::io::stderr()));
     let cli = quadcl::cli::Cli::parse();
     match quadcl::cli::dispatch(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,

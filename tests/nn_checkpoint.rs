@@ -108,3 +108,45 @@ fn tensor_with_wrong_shape_is_an_error_naming_tensor_and_shapes() {
     let err = load_error(dir.path());
     assert!(err.contains(MODEL_FILE) && err.contains("net.l0.state") && err.contains("shape"), "{err}");
 }
+
+/// Rewrites the manifest (its hash is not checked: the tensor files stay consistent).
+fn edit_manifest(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let path = dir.join(MANIFEST_FILE);
+    let mut m: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    edit(&mut m);
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+}
+
+#[test]
+fn inconsistent_manifest_is_an_error_not_a_later_panic() {
+    let cases: [(&str, fn(&mut serde_json::Value)); 6] = [
+        // The re-initialisation at the task's end would panic drawing from U(1, -1).
+        ("init_bound", |m| m["networks"][0]["layers"][1]["init_bound"] = (-1.0).into()),
+        // Fine-tuning a task that never finished (it has no mask to fine-tune).
+        ("fine_tune", |m| m["networks"][0]["training"]["fine_tune"] = true.into()),
+        // A finished task trained again as if new: its end would overwrite its mask.
+        ("fine_tune", |m| m["networks"][0]["training"]["task"] = 0.into()),
+        ("out of range", |m| m["networks"][0]["training"]["task"] = 7.into()),
+        ("twice", |m| m["networks"][0]["finish_order"] = serde_json::json!([0, 1, 1])),
+        ("no layers", |m| {
+            m["networks"][0]["sizes"] = serde_json::json!([8]);
+            m["networks"][0]["layers"] = serde_json::json!([]);
+        }),
+    ];
+    for (needle, edit) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        trained_policy(dir.path());
+        edit_manifest(dir.path(), edit);
+        let err = load_error(dir.path());
+        assert!(err.contains(MANIFEST_FILE) && err.contains(needle), "expected {needle:?}: {err}");
+    }
+}
+
+#[test]
+fn saving_a_task_without_a_name_is_an_error_not_a_policy_that_cannot_load() {
+    let mut net = small_mlp(&MaskConfig::default(), 3);
+    net.begin_task(1, &[]).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let err = save_policy(dir.path(), &["none".into()], &[&net], &BTreeMap::new(), &serde_json::Value::Null).unwrap_err().to_string();
+    assert!(err.contains("task 1") && err.contains("no name"), "{err}");
+}

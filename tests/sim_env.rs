@@ -277,3 +277,70 @@ fn a_meaningless_config_is_an_error_not_a_panic() {
     let err = format!("{:#}", LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).err().unwrap());
     assert!(err.contains("env.kd"), "{err}");
 }
+
+#[test]
+fn observations_carry_the_documented_quantities_and_scales_and_the_history_the_last_five() {
+    let cfg = quiet_config();
+    let mut env = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let mut seen = vec![env.observation().to_vec()];
+    for _ in 0..7 {
+        let action: Vec<f32> = (0..ACT_DIM).map(|_| rng.gen_range(-1.5..1.5)).collect();
+        env.step(&action).unwrap();
+        seen.push(env.observation().to_vec());
+        let (o, p, s) = (env.observation(), env.privileged_observation(), *env.raw_state());
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * (1.0 + b.abs());
+        let ang = obs::rotate_into_frame(s.base_quat, s.base_ang_vel);
+        let lin = obs::rotate_into_frame(s.base_quat, s.base_lin_vel);
+        let g = obs::rotate_into_frame(s.base_quat, [0.0, 0.0, -1.0]);
+        let c = env.command();
+        for k in 0..3 {
+            assert!(close(o[k], 0.25 * ang[k]) && close(o[3 + k], g[k]), "angular velocity / gravity {k}");
+            assert!(close(o[6 + k], [2.0, 2.0, 0.25][k] * c[k]), "command {k}");
+            assert!(close(p[obs::PRIV_BASE_LIN_VEL + k], 2.0 * lin[k]), "linear velocity {k}");
+        }
+        for j in 0..12 {
+            assert!(close(o[9 + j], s.q[j] - env.default_pose()[j]), "joint position {j}");
+            assert!(close(o[21 + j], 0.05 * s.qd[j]), "joint velocity {j}");
+            assert!(close(o[33 + j], action[j]), "previous action {j}");
+        }
+        assert!(close(g.iter().map(|v| v * v).sum::<f32>(), 1.0), "gravity is a unit vector");
+    }
+    // The history holds the last five observations, oldest first.
+    let want: Vec<f32> = seen[seen.len() - HISTORY_LEN..].concat();
+    assert_eq!(env.obs_history(), &want[..]);
+}
+
+#[test]
+fn a_set_command_shows_in_the_newest_history_entry_too() {
+    let mut env = LocomotionEnv::new(&quiet_config(), &robot(), &Perturbation::none()).unwrap();
+    // Right after a reset the history is five copies of the first observation, with the new command.
+    env.set_command([0.5, 0.0, 0.2]);
+    for k in 0..HISTORY_LEN {
+        assert_eq!(&env.obs_history()[k * OBS_DIM..(k + 1) * OBS_DIM], env.observation(), "entry {k} after reset");
+    }
+    for _ in 0..3 {
+        env.step(&[0.0; ACT_DIM]).unwrap();
+    }
+    let older = env.obs_history()[..(HISTORY_LEN - 1) * OBS_DIM].to_vec();
+    env.set_command([-0.5, 0.0, 0.0]);
+    assert_eq!(&env.obs_history()[(HISTORY_LEN - 1) * OBS_DIM..], env.observation());
+    assert_eq!(&env.obs_history()[..(HISTORY_LEN - 1) * OBS_DIM], &older[..], "older entries are what was observed");
+}
+
+#[test]
+fn config_values_that_would_panic_later_are_errors_naming_the_key() {
+    let cases = [
+        ("push_max_vel", EnvConfig { push_max_vel: -1.0, push_interval_s: 0.02, ..EnvConfig::default() }),
+        ("friction_range", EnvConfig { friction_range: [0.5, f32::INFINITY], ..EnvConfig::default() }),
+        ("tracking_sigma", EnvConfig { tracking_sigma: 0.0, ..EnvConfig::default() }),
+        ("soft_limit_fraction", EnvConfig { soft_limit_fraction: f32::NAN, ..EnvConfig::default() }),
+        ("push_interval_s", EnvConfig { push_interval_s: f32::NAN, ..EnvConfig::default() }),
+        ("added_mass", EnvConfig { added_mass_range: [-10.0, -10.0], ..EnvConfig::default() }),
+    ];
+    for (key, cfg) in cases {
+        let result = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).and_then(|mut env| env.step(&[0.0; ACT_DIM]));
+        let err = format!("{:#}", result.err().unwrap_or_else(|| panic!("{key}: accepted")));
+        assert!(err.contains(key), "{key}: {err}");
+    }
+}

@@ -130,3 +130,28 @@ fn feet_on_fixed_links_are_found_and_touch_the_ground() {
     let contacts = &env.privileged_observation()[obs::PRIV_FOOT_CONTACTS..obs::PRIV_FOOT_CONTACTS + 4];
     assert_eq!(contacts, [1.0; 4]);
 }
+
+#[test]
+fn a_link_with_two_parent_joints_is_an_error_not_an_endless_walk() {
+    // A fixed joint from the calf back to the hip link closes a loop in the leg:
+    // walking the leg would never end.
+    let text = a1_text().replacen(
+        "<link name=\"FL_calf\">",
+        "<joint name=\"FL_loop\" type=\"fixed\"><parent link=\"FL_calf\"/><child link=\"FL_hip\"/></joint>\n  <link name=\"FL_calf\">",
+        1,
+    );
+    let err = load_err("loop.urdf", &text);
+    assert!(err.contains("loop.urdf") && err.contains("not a tree") && err.contains("FL_hip") && err.contains("FL_loop"), "{err}");
+}
+
+#[test]
+fn a_link_not_connected_to_the_trunk_is_an_error() {
+    // Two links hanging from each other in a cycle, apart from the robot: no second root, but not a tree.
+    let text = a1_text().replacen(
+        "<link name=\"FL_calf\">",
+        "<link name=\"ghost_a\"/><link name=\"ghost_b\"/>\n  <joint name=\"ghost_ab\" type=\"fixed\"><parent link=\"ghost_a\"/><child link=\"ghost_b\"/></joint>\n  <joint name=\"ghost_ba\" type=\"fixed\"><parent link=\"ghost_b\"/><child link=\"ghost_a\"/></joint>\n  <link name=\"FL_calf\">",
+        1,
+    );
+    let err = load_err("ghost.urdf", &text);
+    assert!(err.contains("ghost.urdf") && err.contains("not a tree") && err.contains("ghost_a"), "{err}");
+}

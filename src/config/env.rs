@@ -192,7 +192,7 @@ impl EnvConfig {
             ("added_mass_range", self.added_mass_range),
             ("motor_strength_range", self.motor_strength_range),
         ] {
-            anyhow::ensure!(r[0] <= r[1], "env.{name} must be [low, high] with low <= high, got {r:?}");
+            anyhow::ensure!(r[0] <= r[1] && r[0].is_finite() && r[1].is_finite(), "env.{name} must be finite [low, high] with low <= high, got {r:?}");
         }
         anyhow::ensure!(self.noise_std >= 0.0 && self.noise_std.is_finite(), "env.noise_std must be finite and >= 0, got {}", self.noise_std);
         for (name, v) in [("kp", self.kp), ("kd", self.kd), ("action_scale", self.action_scale), ("clip_actions", self.clip_actions)] {
@@ -200,6 +200,27 @@ impl EnvConfig {
         }
         anyhow::ensure!(self.kp > 0.0, "env.kp must be > 0 (the PD spring), got {}", self.kp);
         anyhow::ensure!(self.start_height.is_finite() && self.start_height > 0.0, "env.start_height must be > 0, got {}", self.start_height);
+        for (name, v) in [
+            ("push_interval_s", self.push_interval_s),
+            ("push_max_vel", self.push_max_vel),
+            ("soft_limit_fraction", self.soft_limit_fraction),
+            ("command_resample_s", self.command_resample_s),
+        ] {
+            anyhow::ensure!(v.is_finite() && v >= 0.0, "env.{name} must be finite and >= 0, got {v}");
+        }
+        anyhow::ensure!(self.tracking_sigma.is_finite() && self.tracking_sigma > 0.0, "env.tracking_sigma must be > 0, got {}", self.tracking_sigma);
+        for (name, v) in [
+            ("max_tilt_rad", self.max_tilt_rad),
+            ("height_target", self.height_target),
+            ("feet_height_target", self.feet_height_target),
+            ("default_hip_left", self.default_hip_left),
+            ("default_hip_right", self.default_hip_right),
+            ("default_thigh_front", self.default_thigh_front),
+            ("default_thigh_rear", self.default_thigh_rear),
+            ("default_calf", self.default_calf),
+        ] {
+            anyhow::ensure!(v.is_finite(), "env.{name} must be finite, got {v}");
+        }
         Ok(())
     }
 }

@@ -104,6 +104,9 @@ impl MaskConfig {
         anyhow::ensure!(self.score_init_std > 0.0, "net.mask.score_init_std must be > 0");
         anyhow::ensure!(self.sigma_init >= 0.0 && self.sigma_floor >= 0.0, "net.mask.sigma_init and sigma_floor must be >= 0");
         anyhow::ensure!(self.sigma_max >= self.sigma_floor, "net.mask.sigma_max ({}) must be >= sigma_floor ({})", self.sigma_max, self.sigma_floor);
+        anyhow::ensure!(self.entropy_weight.is_finite() && self.entropy_weight >= 0.0, "net.mask.entropy_weight = {}: expected a finite value >= 0", self.entropy_weight);
+        anyhow::ensure!(self.transfer_bonus.is_finite(), "net.mask.transfer_bonus = {}: expected a finite value", self.transfer_bonus);
+        anyhow::ensure!(self.score_init_std.is_finite() && self.sigma_max.is_finite(), "net.mask.score_init_std and sigma_max must be finite");
         Ok(())
     }
 }
@@ -151,6 +154,24 @@ impl Default for NetConfig {
             critic: MlpConfig::paper(&[512, 256, 128]),
             cenet: MlpConfig::paper(&[256, 128]),
             mask: MaskConfig::default(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_mask_settings_are_errors_naming_the_key() {
+        assert!(MaskConfig::default().validate().is_ok());
+        for (key, cfg) in [
+            ("entropy_weight", MaskConfig { entropy_weight: f64::NAN, ..MaskConfig::default() }),
+            ("transfer_bonus", MaskConfig { transfer_bonus: f64::INFINITY, ..MaskConfig::default() }),
+            ("score_init_std", MaskConfig { score_init_std: f64::INFINITY, ..MaskConfig::default() }),
+        ] {
+            let err = cfg.validate().unwrap_err().to_string();
+            assert!(err.contains(key), "{key}: {err}");
         }
     }
 }

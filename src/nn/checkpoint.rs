@@ -136,6 +136,9 @@ pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras
             layers.push(LayerEntry { name: n.clone(), shape: [l.out_dim, l.in_dim], init_bound: l.init_bound });
         }
         let training = net.layers()[0].training.as_ref().map(|t| TrainingEntry { task: t.task, fine_tune: t.fine_tune, iteration: t.iteration });
+        if let Some(t) = &training {
+            ensure!(t.task < tasks.len(), "{}: task {} in progress has no name (only {} task names given)", net.name(), t.task, tasks.len());
+        }
         entries.push(NetworkEntry {
             name: net.name().to_string(),
             sizes: net.sizes().to_vec(),
@@ -221,11 +224,23 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
         let ctx = || format!("{}: network {}", manifest_path.display(), e.name);
         e.mask.validate().with_context(ctx)?;
         ensure!(e.sizes.len() == e.layers.len() + 1, "{}: {} sizes for {} layers", ctx(), e.sizes.len(), e.layers.len());
+        ensure!(!e.layers.is_empty() && e.sizes.iter().all(|s| *s > 0), "{}: no layers, or a zero size in {:?}", ctx(), e.sizes);
         ensure!(e.finish_order.iter().all(|t| *t < n_tasks), "{}: a finished task id is out of range of the {n_tasks} tasks", ctx());
+        for (i, t) in e.finish_order.iter().enumerate() {
+            ensure!(!e.finish_order[..i].contains(t), "{}: task {t} is listed twice in finish_order", ctx());
+        }
+        if let Some(tr) = &e.training {
+            ensure!(tr.task < n_tasks, "{}: the task in progress ({}) is out of range of the {n_tasks} tasks", ctx(), tr.task);
+            // A finished task can only be fine-tuned; a new one has no mask to fine-tune.
+            let finished = e.finish_order.contains(&tr.task);
+            ensure!(tr.fine_tune == finished, "{}: task {} in progress has fine_tune = {}, but it has {}finished", ctx(), tr.task, tr.fine_tune, if finished { "" } else { "not " });
+        }
         let mut layers = Vec::new();
         for (i, le) in e.layers.iter().enumerate() {
             let [out_dim, in_dim] = le.shape;
             ensure!([e.sizes[i + 1], e.sizes[i]] == le.shape, "{}: layer {} shape {:?} does not match sizes {:?}", ctx(), le.name, le.shape, e.sizes);
+            // The re-initialisation draws from U(-init_bound, init_bound).
+            ensure!(le.init_bound.is_finite() && le.init_bound > 0.0, "{}: layer {} has init_bound {}, expected a finite value > 0", ctx(), le.name, le.init_bound);
             let n = &le.name;
             let shape = [out_dim, in_dim];
             let states = model

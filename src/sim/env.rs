@@ -155,10 +155,15 @@ impl LocomotionEnv {
         self.command
     }
 
-    /// Sets the command until the next resample (for evaluation and tests).
+    /// Sets the command until the next resample (for evaluation and tests). The
+    /// observation and the newest history entry (every entry, right after a reset) show it.
     pub fn set_command(&mut self, command: [f32; 3]) {
         self.command = command;
         self.write_observations();
+        let first = if self.episode_step == 0 { 0 } else { HISTORY_LEN - 1 };
+        for k in first..HISTORY_LEN {
+            self.history[k * OBS_DIM..(k + 1) * OBS_DIM].copy_from_slice(&self.obs);
+        }
     }
 
     /// This episode's physical parameters.

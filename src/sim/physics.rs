@@ -102,6 +102,8 @@ impl RobotSim {
 
         let mut urdf = robot.urdf.clone();
         urdf.links[robot.trunk_link].inertial.mass.value += params.added_mass as f64;
+        let trunk_mass = urdf.links[robot.trunk_link].inertial.mass.value;
+        anyhow::ensure!(trunk_mass > 0.0, "{}: trunk mass {trunk_mass} kg after adding {} kg (env.added_mass_range) must be > 0", robot.path.display(), params.added_mass);
         let options = UrdfLoaderOptions {
             collider_blueprint: ColliderBuilder::default()
                 .density(0.0)

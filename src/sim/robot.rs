@@ -227,16 +227,36 @@ fn link_index(urdf: &Robot, name: &str) -> anyhow::Result<usize> {
     urdf.links.iter().position(|l| l.name == name).ok_or_else(|| anyhow!("joint refers to link '{name}', which does not exist"))
 }
 
-/// The unique link that is no joint's child.
+/// The unique link that is no joint's child; the joints must form a tree
+/// (one parent joint per link, every link reachable from the root), else the
+/// walks over the legs would never end.
 fn find_root(urdf: &Robot) -> anyhow::Result<usize> {
     for joint in &urdf.joints {
         link_index(urdf, &joint.parent.link).with_context(|| format!("joint '{}'", joint.name))?;
         link_index(urdf, &joint.child.link).with_context(|| format!("joint '{}'", joint.name))?;
     }
+    for link in &urdf.links {
+        let parents: Vec<&str> = urdf.joints.iter().filter(|j| j.child.link == link.name).map(|j| j.name.as_str()).collect();
+        if parents.len() > 1 {
+            bail!("not a tree: link '{}' is the child of {} joints ({})", link.name, parents.len(), parents.join(", "));
+        }
+    }
     let roots: Vec<usize> =
         (0..urdf.links.len()).filter(|&i| !urdf.joints.iter().any(|j| j.child.link == urdf.links[i].name)).collect();
     match roots.as_slice() {
-        [root] => Ok(*root),
+        [root] => {
+            // One parent per link: a walk from the root visits each link at most once.
+            let mut reached = vec![false; urdf.links.len()];
+            let mut stack = vec![*root];
+            while let Some(l) = stack.pop() {
+                reached[l] = true;
+                stack.extend(children(urdf, &urdf.links[l].name).map(|j| link_index(urdf, &urdf.joints[j].child.link)).collect::<anyhow::Result<Vec<_>>>()?);
+            }
+            match reached.iter().position(|r| !r) {
+                Some(l) => bail!("not a tree: link '{}' is not connected to the trunk '{}'", urdf.links[l].name, urdf.links[*root].name),
+                None => Ok(*root),
+            }
+        }
         [] => bail!("not a tree: every link is some joint's child (no trunk)"),
         many => bail!(
             "not a quadruped tree: {} root links ({}), expected one trunk",
