@@ -20,6 +20,10 @@ pub enum Command {
     Bench(crate::cmd::bench::BenchArgs),
     /// Per network, layer and task: selected, vacant, occupied and private parameter counts.
     Masks(crate::cmd::masks::MasksArgs),
+    /// Train one task with PPO + CENet; writes metrics and a policy directory.
+    Train(crate::cmd::train::TrainArgs),
+    /// Evaluate a policy on a task: return, tracking errors, falls (JSON with --json).
+    Eval(crate::cmd::eval::EvalArgs),
     /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
     Run(crate::cmd::run::RunArgs),
 }
@@ -29,6 +33,8 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Bench(args)) => crate::cmd::bench::run(args),
         Some(Command::Masks(args)) => crate::cmd::masks::run(args),
+        Some(Command::Train(args)) => crate::cmd::train::run(args),
+        Some(Command::Eval(args)) => crate::cmd::eval::run(args),
         Some(Command::Run(args)) => crate::cmd::run::run(args),
         None => {
             crate::cmd::welcome::run();

@@ -1,6 +1,8 @@
 //! One file per CLI subcommand: thin glue between the command line and the modules.
 
 pub mod bench;
+pub mod eval;
 pub mod masks;
 pub mod run;
+pub mod train;
 pub mod welcome;

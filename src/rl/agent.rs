@@ -1,0 +1,324 @@
+//! The learner's networks and observation statistics: an asymmetric
+//! actor-critic with DreamWaQ's context estimator (CENet).
+//!
+//! - encoder: history (B, H * obs) -> [velocity 3 | latent mean L | latent logvar L]
+//! - decoder: [velocity 3 | latent sample L] -> next observation (B, obs)
+//! - actor:   [obs | velocity estimate 3 | latent sample L] -> action means (B, act)
+//! - critic:  privileged obs (B, priv) -> value (B, 1)
+//! - `log_std` (act,): the Gaussian policy's state-independent log-std (per task).
+//!
+//! All four networks are `nn::MaskedMlp`s (METHOD 2): while a task trains
+//! they run with the current task's sampled masks ([`Agent::begin_iteration`]);
+//! after [`Agent::end_task`] (or when loaded from a policy directory) they
+//! recall the task's frozen masks and biases, bit-identically.
+//!
+//! The actor's CENet inputs are detached: the CENet learns only from its own
+//! beta-VAE loss (DreamWaQ), the actor treats its estimate as an input.
+//! Observations are normalised here (running statistics, frozen per task);
+//! histories are normalised block by block with the observation statistics.
+
+use super::cenet_loss::{reparameterize, split_encoder_output, CenetEstimate};
+use super::env::EnvDims;
+use super::losses::gaussian_log_prob;
+use super::normalizer::RunningNormalizer;
+use crate::config::Config;
+use crate::nn::{MaskedMlp, Param, TaskId};
+use candle_core::{Device, Tensor, Var};
+use rand::Rng;
+use rand_distr::StandardNormal;
+
+/// Networks, policy std and observation statistics of one learner.
+#[derive(Debug)]
+pub struct Agent {
+    pub dims: EnvDims,
+    /// Latent width L of the CENet (0 when the CENet is off).
+    pub latent_dim: usize,
+    pub use_cenet: bool,
+    pub actor: MaskedMlp,
+    pub critic: MaskedMlp,
+    pub encoder: MaskedMlp,
+    pub decoder: MaskedMlp,
+    /// The task being trained, or recalled.
+    pub task: TaskId,
+    /// Recall mode: forward with the task's frozen masks (after `end_task`, or loaded).
+    pub recall: bool,
+    /// (act,) log standard deviation of the policy.
+    pub log_std: Var,
+    /// Statistics of the actor observation (also used for each history block).
+    pub obs_normalizer: RunningNormalizer,
+    /// Statistics of the privileged observation.
+    pub privileged_normalizer: RunningNormalizer,
+    normalize: bool,
+    logvar_clamp: f64,
+}
+
+/// What the policy did at one step of all environments (row-major, N rows).
+#[derive(Debug, Clone)]
+pub struct ActOutput {
+    /// (N, act) sampled actions.
+    pub actions: Vec<f32>,
+    /// (N, act) the Gaussian means.
+    pub means: Vec<f32>,
+    /// (N,) log-probabilities of the sampled actions.
+    pub log_probs: Vec<f32>,
+    /// (N, context) the CENet estimate the actor saw.
+    pub context: Vec<f32>,
+}
+
+/// A (rows, cols) tensor of standard normal noise from `rng`.
+pub fn normal_tensor(rng: &mut impl Rng, rows: usize, cols: usize) -> candle_core::Result<Tensor> {
+    let data: Vec<f32> = (0..rows * cols).map(|_| rng.sample(StandardNormal)).collect();
+    Tensor::from_vec(data, (rows, cols), &Device::Cpu)
+}
+
+/// A row-major slice as a (rows, width) tensor.
+pub fn matrix(data: &[f32], width: usize) -> candle_core::Result<Tensor> {
+    Tensor::from_slice(data, (data.len() / width.max(1), width), &Device::Cpu)
+}
+
+impl Agent {
+    /// Fresh networks for an environment with `dims`; `seed` seeds every
+    /// initialiser. Sizes: `config.net` (actor, critic, CENet encoder),
+    /// `config.ppo.cenet_decoder_hidden` (decoder, with the encoder's activation).
+    pub fn new(dims: EnvDims, config: &Config, seed: u64) -> anyhow::Result<Self> {
+        let (cfg, net) = (&config.ppo, &config.net);
+        let latent_dim = if cfg.use_cenet { cfg.cenet_latent_dim } else { 0 };
+        let context = if cfg.use_cenet { 3 + latent_dim } else { 0 };
+        let sizes = |input: usize, hidden: &[usize], output: usize| {
+            let mut s = vec![input];
+            s.extend_from_slice(hidden);
+            s.push(output);
+            s
+        };
+        let mask = &net.mask;
+        let actor = MaskedMlp::new("actor", &sizes(dims.obs + context, &net.actor.hidden, dims.act), net.actor.activation, mask, seed)?;
+        let critic = MaskedMlp::new(
+            "critic",
+            &sizes(dims.privileged_obs, &net.critic.hidden, 1),
+            net.critic.activation,
+            mask,
+            seed.wrapping_add(1),
+        )?;
+        let history = dims.history_len * dims.obs;
+        let encoder = MaskedMlp::new(
+            "cenet_encoder",
+            &sizes(history, &net.cenet.hidden, 3 + 2 * cfg.cenet_latent_dim),
+            net.cenet.activation,
+            mask,
+            seed.wrapping_add(2),
+        )?;
+        let decoder = MaskedMlp::new(
+            "cenet_decoder",
+            &sizes(3 + cfg.cenet_latent_dim, &cfg.cenet_decoder_hidden, dims.obs),
+            net.cenet.activation,
+            mask,
+            seed.wrapping_add(3),
+        )?;
+        let log_std = Var::from_tensor(&Tensor::from_vec(
+            vec![cfg.init_action_std.ln() as f32; dims.act],
+            dims.act,
+            &Device::Cpu,
+        )?)?;
+        Ok(Self {
+            dims,
+            latent_dim,
+            use_cenet: cfg.use_cenet,
+            actor,
+            critic,
+            encoder,
+            decoder,
+            task: 0,
+            recall: false,
+            log_std,
+            obs_normalizer: RunningNormalizer::new(dims.obs, cfg.obs_clip as f32),
+            privileged_normalizer: RunningNormalizer::new(dims.privileged_obs, cfg.obs_clip as f32),
+            normalize: cfg.normalize_observations,
+            logvar_clamp: cfg.cenet_logvar_clamp,
+        })
+    }
+
+    /// The four networks, in checkpoint order.
+    pub fn networks(&self) -> [&MaskedMlp; 4] {
+        [&self.actor, &self.critic, &self.encoder, &self.decoder]
+    }
+
+    fn networks_mut(&mut self) -> [&mut MaskedMlp; 4] {
+        [&mut self.actor, &mut self.critic, &mut self.encoder, &mut self.decoder]
+    }
+
+    /// Starts training `task` (METHOD 2.1; a finished task => fine-tuning).
+    /// The observation statistics follow the data again.
+    pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
+        for net in self.networks_mut() {
+            net.begin_task(task, related)?;
+        }
+        self.task = task;
+        self.recall = false;
+        self.obs_normalizer.unfreeze();
+        self.privileged_normalizer.unfreeze();
+        Ok(())
+    }
+
+    /// Once per training iteration: new soft-score samples and masks.
+    pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
+        for net in self.networks_mut() {
+            net.begin_iteration(iteration, rng)?;
+        }
+        Ok(())
+    }
+
+    /// Sum of the networks' soft-score losses (METHOD 2.3), a scalar.
+    pub fn soft_score_loss(&self) -> anyhow::Result<Tensor> {
+        let mut total = self.actor.soft_score_loss()?;
+        for net in &self.networks()[1..] {
+            total = total.add(&net.soft_score_loss()?)?;
+        }
+        Ok(total)
+    }
+
+    /// Ends the task (METHOD 2.4): final masks, frozen statistics, recall mode.
+    pub fn end_task(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
+        for net in self.networks_mut() {
+            net.end_task(rng)?;
+        }
+        self.obs_normalizer.freeze();
+        self.privileged_normalizer.freeze();
+        self.recall = true;
+        Ok(())
+    }
+
+    /// Forward through `net`: training masks, or the task's frozen ones in recall mode.
+    fn run(&self, net: &MaskedMlp, x: &Tensor) -> anyhow::Result<Tensor> {
+        if self.recall {
+            net.forward_task(self.task, x)
+        } else {
+            net.forward(x)
+        }
+    }
+
+    /// The decoder's reconstruction of the next observation from `[v_est | z]` (B, 3 + L).
+    pub fn decode(&self, velocity_and_latent: &Tensor) -> anyhow::Result<Tensor> {
+        self.run(&self.decoder, velocity_and_latent)
+    }
+
+    /// Width of the CENet context the actor sees (3 + L, or 0 without CENet).
+    pub fn context_dim(&self) -> usize {
+        if self.use_cenet {
+            3 + self.latent_dim
+        } else {
+            0
+        }
+    }
+
+    /// Every trainable parameter: actor, critic, CENet, then `log_std`.
+    pub fn params(&self) -> Vec<Param> {
+        let mut out = self.actor.params();
+        out.extend(self.critic.params());
+        if self.use_cenet {
+            out.extend(self.encoder.params());
+            out.extend(self.decoder.params());
+        }
+        if self.recall {
+            return out; // nothing trains in recall mode
+        }
+        out.push(Param { name: "log_std".into(), var: self.log_std.clone(), update_mask: None });
+        out
+    }
+
+    /// Updates the running statistics with raw observations (no-op when frozen).
+    pub fn observe_statistics(&mut self, obs: &[f32], privileged: &[f32]) -> anyhow::Result<()> {
+        if self.normalize {
+            self.obs_normalizer.update(obs)?;
+            self.privileged_normalizer.update(privileged)?;
+        }
+        Ok(())
+    }
+
+    /// Normalised copy of raw actor observations (N, obs) or histories (N, H * obs).
+    pub fn normalize_obs(&self, raw: &[f32]) -> Vec<f32> {
+        if self.normalize {
+            self.obs_normalizer.normalize(raw)
+        } else {
+            raw.to_vec()
+        }
+    }
+
+    /// Normalised copy of raw privileged observations (N, priv).
+    pub fn normalize_privileged(&self, raw: &[f32]) -> Vec<f32> {
+        if self.normalize {
+            self.privileged_normalizer.normalize(raw)
+        } else {
+            raw.to_vec()
+        }
+    }
+
+    /// The CENet's estimate from normalised histories (B, H * obs).
+    pub fn estimate(&self, history: &Tensor) -> anyhow::Result<CenetEstimate> {
+        split_encoder_output(&self.run(&self.encoder, history)?, self.latent_dim, self.logvar_clamp)
+    }
+
+    /// The actor's context from normalised histories: `[v_est | z]` with z
+    /// sampled using `noise` (B, L), or z = mean when `noise` is None
+    /// (deployment). Detached. (B, context); (B, 0) without CENet.
+    pub fn context(&self, history: &Tensor, noise: Option<&Tensor>) -> anyhow::Result<Tensor> {
+        let batch = history.dim(0)?;
+        if !self.use_cenet {
+            return Ok(Tensor::zeros((batch, 0), candle_core::DType::F32, &Device::Cpu)?);
+        }
+        let est = self.estimate(history)?;
+        let z = match noise {
+            Some(noise) => reparameterize(&est.latent_mean, &est.latent_logvar, noise)?,
+            None => est.latent_mean.clone(),
+        };
+        Ok(Tensor::cat(&[&est.velocity, &z], 1)?.detach())
+    }
+
+    /// Action means from normalised obs (B, obs) and context (B, context): (B, act).
+    pub fn action_mean(&self, obs: &Tensor, context: &Tensor) -> anyhow::Result<Tensor> {
+        let input = if self.use_cenet { Tensor::cat(&[obs, context], 1)? } else { obs.clone() };
+        self.run(&self.actor, &input)
+    }
+
+    /// Values from normalised privileged obs (B, priv): (B,).
+    pub fn value(&self, privileged: &Tensor) -> anyhow::Result<Tensor> {
+        Ok(self.run(&self.critic, privileged)?.squeeze(1)?)
+    }
+
+    /// Samples actions for normalised obs (N, obs) and histories (N, H * obs).
+    pub fn act(&self, obs: &[f32], history: &[f32], rng: &mut impl Rng) -> anyhow::Result<ActOutput> {
+        let n = obs.len() / self.dims.obs;
+        let noise = normal_tensor(rng, n, self.latent_dim)?;
+        let context = self.context(&matrix(history, self.dims.history_len * self.dims.obs)?, Some(&noise))?;
+        let mean = self.action_mean(&matrix(obs, self.dims.obs)?, &context)?;
+        let action_noise = normal_tensor(rng, n, self.dims.act)?;
+        let actions = mean.add(&action_noise.broadcast_mul(&self.log_std.as_tensor().exp()?)?)?;
+        let log_probs = gaussian_log_prob(&actions, &mean, self.log_std.as_tensor())?;
+        Ok(ActOutput {
+            actions: actions.flatten_all()?.to_vec1()?,
+            means: mean.flatten_all()?.to_vec1()?,
+            log_probs: log_probs.to_vec1()?,
+            context: context.flatten_all()?.to_vec1()?,
+        })
+    }
+
+    /// Deterministic actions (the means, latent = its mean) for raw obs and
+    /// histories: what a deployed policy does. (N, act).
+    pub fn act_deterministic(&self, raw_obs: &[f32], raw_history: &[f32]) -> anyhow::Result<Vec<f32>> {
+        let obs = self.normalize_obs(raw_obs);
+        let history = self.normalize_obs(raw_history);
+        let context = self.context(&matrix(&history, self.dims.history_len * self.dims.obs)?, None)?;
+        let mean = self.action_mean(&matrix(&obs, self.dims.obs)?, &context)?;
+        Ok(mean.flatten_all()?.to_vec1()?)
+    }
+
+    /// Values (N,) for normalised privileged observations.
+    pub fn values(&self, privileged: &[f32]) -> anyhow::Result<Vec<f32>> {
+        Ok(self.value(&matrix(privileged, self.dims.privileged_obs)?)?.to_vec1()?)
+    }
+
+    /// Extracts the CENet's velocity target (N, 3) from raw privileged observations.
+    pub fn base_velocity(&self, raw_privileged: &[f32]) -> Vec<f32> {
+        let (width, off) = (self.dims.privileged_obs, self.dims.base_velocity_offset);
+        raw_privileged.chunks_exact(width).flat_map(|row| row[off..off + 3].iter().copied()).collect()
+    }
+}

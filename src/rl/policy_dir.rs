@@ -1,0 +1,135 @@
+//! Saving and loading a trained policy directory through `nn::checkpoint`:
+//! the four masked networks (base weights, per-task masks and biases), and as
+//! extras per task t: `log_std.t{t}` (the policy's action log-std),
+//! `obs_normalizer.t{t}.{mean,var,count}` and
+//! `privileged_normalizer.t{t}.{mean,var,count}`. The manifest's config is a
+//! [`PolicyInfo`]: the run's full [`Config`], the env widths the networks
+//! were built for, and iterations trained.
+
+use super::agent::Agent;
+use super::env::EnvDims;
+use super::normalizer::RunningNormalizer;
+use crate::config::Config;
+use crate::nn::checkpoint;
+use crate::nn::TaskId;
+use anyhow::Context;
+use candle_core::{Device, Tensor};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// What `quadcl train` stores as the checkpoint's config.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PolicyInfo {
+    /// The whole configuration of the run.
+    pub config: Config,
+    /// Environment widths the networks were built for.
+    pub dims: ManifestDims,
+    /// Training iterations completed.
+    pub iterations: usize,
+}
+
+/// Serialisable copy of [`EnvDims`].
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+pub struct ManifestDims {
+    pub obs: usize,
+    pub privileged_obs: usize,
+    pub history_len: usize,
+    pub act: usize,
+    pub base_velocity_offset: usize,
+    pub control_dt: f64,
+}
+
+impl From<EnvDims> for ManifestDims {
+    fn from(d: EnvDims) -> Self {
+        Self {
+            obs: d.obs,
+            privileged_obs: d.privileged_obs,
+            history_len: d.history_len,
+            act: d.act,
+            base_velocity_offset: d.base_velocity_offset,
+            control_dt: d.control_dt,
+        }
+    }
+}
+impl From<ManifestDims> for EnvDims {
+    fn from(d: ManifestDims) -> Self {
+        Self {
+            obs: d.obs,
+            privileged_obs: d.privileged_obs,
+            history_len: d.history_len,
+            act: d.act,
+            base_velocity_offset: d.base_velocity_offset,
+            control_dt: d.control_dt,
+        }
+    }
+}
+
+/// A loaded policy: the agent in recall mode on its task, the task names and the info.
+#[derive(Debug)]
+pub struct LoadedPolicy {
+    pub agent: Agent,
+    pub tasks: Vec<String>,
+    pub info: PolicyInfo,
+}
+
+fn put_normalizer(prefix: &str, n: &RunningNormalizer, out: &mut BTreeMap<String, Tensor>) -> anyhow::Result<()> {
+    out.insert(format!("{prefix}.mean"), Tensor::new(n.mean().as_slice(), &Device::Cpu)?);
+    out.insert(format!("{prefix}.var"), Tensor::new(n.var().as_slice(), &Device::Cpu)?);
+    out.insert(format!("{prefix}.count"), Tensor::new(&[n.count() as f32], &Device::Cpu)?);
+    Ok(())
+}
+
+fn get_normalizer(prefix: &str, extras: &BTreeMap<String, Tensor>, clip: f32) -> anyhow::Result<RunningNormalizer> {
+    let get = |key: &str| extras.get(&format!("{prefix}.{key}")).with_context(|| format!("missing extra tensor {prefix}.{key}"));
+    let count = get("count")?.flatten_all()?.to_vec1::<f32>()?.first().copied().unwrap_or(0.0);
+    RunningNormalizer::from_saved(&get("mean")?.to_vec1::<f32>()?, &get("var")?.to_vec1::<f32>()?, f64::from(count), clip)
+}
+
+/// Writes `agent` after its task ended (`agent.end_task`) to `dir`.
+/// `tasks[t]` names task id t.
+pub fn save_policy(agent: &Agent, tasks: &[String], info: &PolicyInfo, dir: &Path) -> anyhow::Result<()> {
+    anyhow::ensure!(agent.task < tasks.len(), "task id {} has no name among {} tasks", agent.task, tasks.len());
+    let t = agent.task;
+    let mut extras = BTreeMap::new();
+    extras.insert(format!("log_std.t{t}"), agent.log_std.as_tensor().copy()?);
+    put_normalizer(&format!("obs_normalizer.t{t}"), &agent.obs_normalizer, &mut extras)?;
+    put_normalizer(&format!("privileged_normalizer.t{t}"), &agent.privileged_normalizer, &mut extras)?;
+    checkpoint::save_policy(dir, tasks, &agent.networks(), &extras, &serde_json::to_value(info)?)
+}
+
+/// Reads a policy directory and returns the agent recalling task `task`
+/// (by name; `None`: the last task). Errors name the directory and what is wrong.
+pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolicy> {
+    let policy = checkpoint::load_policy(dir)?;
+    let info: PolicyInfo = serde_json::from_value(policy.config.clone())
+        .with_context(|| format!("{}: the manifest's config is not a quadcl training config", dir.display()))?;
+    let task_id: TaskId = match task {
+        Some(name) => policy
+            .tasks
+            .iter()
+            .position(|t| t == name)
+            .with_context(|| format!("{}: no task {name:?}; it has {:?}", dir.display(), policy.tasks))?,
+        None => policy.tasks.len().checked_sub(1).with_context(|| format!("{}: the policy has no tasks", dir.display()))?,
+    };
+    let mut networks = policy.networks;
+    let mut take = |name: &str| -> anyhow::Result<crate::nn::MaskedMlp> {
+        let i = networks.iter().position(|n| n.name() == name).with_context(|| format!("{}: no network {name}", dir.display()))?;
+        Ok(networks.swap_remove(i))
+    };
+    let mut agent = Agent::new(info.dims.into(), &info.config, info.config.seed)?;
+    agent.actor = take("actor")?;
+    agent.critic = take("critic")?;
+    agent.encoder = take("cenet_encoder")?;
+    agent.decoder = take("cenet_decoder")?;
+    let extras = &policy.extras;
+    let log_std = extras.get(&format!("log_std.t{task_id}")).with_context(|| format!("{}: missing log_std.t{task_id}", dir.display()))?;
+    agent.log_std.set(log_std)?;
+    let clip = info.config.ppo.obs_clip as f32;
+    agent.obs_normalizer = get_normalizer(&format!("obs_normalizer.t{task_id}"), extras, clip).with_context(|| dir.display().to_string())?;
+    agent.privileged_normalizer =
+        get_normalizer(&format!("privileged_normalizer.t{task_id}"), extras, clip).with_context(|| dir.display().to_string())?;
+    agent.task = task_id;
+    agent.recall = true;
+    Ok(LoadedPolicy { agent, tasks: policy.tasks, info })
+}

@@ -1,0 +1,276 @@
+//! The PPO learner, readable top to bottom (CleanRL's
+//! `ppo_continuous_action.py` and rsl_rl's `PPO` are the models):
+//!
+//! 1. [`PpoLearner::collect_rollout`]: `steps_per_env` steps of every env
+//!    with the current (stochastic) policy; observation statistics follow
+//!    the data; GAE with time-out bootstrapping at the end.
+//! 2. [`PpoLearner::update`]: `epochs` passes over the rollout in
+//!    `minibatches` random minibatches. Per minibatch: adapt the learning rate
+//!    from KL(old || new) (legged_gym), then minimise
+//!    `surrogate + c_v * value_loss - c_e * entropy + c_cenet * cenet_loss`,
+//!    clip the global gradient norm, one Adam step.
+//!
+//! Metrics are namespaced as in CleanRL: `charts/*`, `losses/*`, `time/*`.
+
+use super::agent::{matrix, normal_tensor, Agent};
+use super::cenet_loss::{cenet_loss, reparameterize};
+use super::env::{FinishedEpisode, TrainEnv};
+use super::losses::{
+    adapt_learning_rate, clip_fraction, clipped_surrogate_loss, gaussian_entropy, gaussian_kl, gaussian_log_prob,
+    normalize_advantages, value_loss,
+};
+use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, StepRecord};
+use crate::config::PpoConfig;
+use crate::nn::{AdamConfig, MaskedAdam};
+use candle_core::{Device, Tensor};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::collections::{BTreeMap, VecDeque};
+use std::time::Instant;
+
+/// One iteration's metrics, by namespaced name (`losses/approx_kl`, ...).
+pub type Metrics = BTreeMap<String, f64>;
+
+/// Episodes kept for the episode statistics (`charts/episodic_return`, ...).
+const EPISODE_WINDOW: usize = 100;
+
+/// PPO over an [`Agent`], with its optimiser, rollout buffer and random stream.
+pub struct PpoLearner {
+    pub cfg: PpoConfig,
+    pub agent: Agent,
+    pub optimizer: MaskedAdam,
+    buffer: RolloutBuffer,
+    rng: ChaCha8Rng,
+    /// (act,) the policy's log-std when the rollout was collected.
+    rollout_log_std: Option<Tensor>,
+    recent_episodes: VecDeque<FinishedEpisode>,
+    /// Iterations completed.
+    pub iteration: usize,
+}
+
+impl PpoLearner {
+    /// A learner for an environment batch of `num_envs` with `agent`'s dims.
+    pub fn new(cfg: PpoConfig, agent: Agent, num_envs: usize, seed: u64) -> anyhow::Result<Self> {
+        cfg.validate()?;
+        let d = agent.dims;
+        let dims = RolloutDims {
+            obs: d.obs,
+            privileged_obs: d.privileged_obs,
+            obs_history: d.history_len * d.obs,
+            act: d.act,
+            context: agent.context_dim(),
+        };
+        Ok(Self {
+            optimizer: MaskedAdam::new(AdamConfig { learning_rate: cfg.learning_rate, ..AdamConfig::default() }),
+            buffer: RolloutBuffer::new(dims, cfg.steps_per_env, num_envs),
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            rollout_log_std: None,
+            recent_episodes: VecDeque::new(),
+            iteration: 0,
+            cfg,
+            agent,
+        })
+    }
+
+    /// Ends the agent's task (final masks, frozen statistics), with the learner's random stream.
+    pub fn end_task(&mut self) -> anyhow::Result<()> {
+        self.agent.end_task(&mut self.rng)
+    }
+
+    /// One training iteration: a rollout, then an update. Returns its metrics.
+    pub fn train_iteration(&mut self, env: &mut dyn TrainEnv) -> anyhow::Result<Metrics> {
+        let start = Instant::now();
+        self.agent.begin_iteration(self.iteration, &mut self.rng)?;
+        let mut metrics = self.collect_rollout(env)?;
+        let rollout_s = start.elapsed().as_secs_f64();
+        let update_start = Instant::now();
+        metrics.extend(self.update()?);
+        let update_s = update_start.elapsed().as_secs_f64();
+        let total = start.elapsed().as_secs_f64();
+        metrics.insert("time/rollout_s".into(), rollout_s);
+        metrics.insert("time/update_s".into(), update_s);
+        metrics.insert("charts/SPS".into(), self.buffer.capacity() as f64 / total.max(1e-9));
+        self.iteration += 1;
+        metrics.insert("charts/iteration".into(), self.iteration as f64);
+        Ok(metrics)
+    }
+
+    /// Runs the policy for `steps_per_env` steps of every env and computes
+    /// advantages. Metrics: episode statistics and where the time went.
+    pub fn collect_rollout(&mut self, env: &mut dyn TrainEnv) -> anyhow::Result<Metrics> {
+        anyhow::ensure!(env.num_envs() == self.buffer.num_envs, "env has {} members, learner expects {}", env.num_envs(), self.buffer.num_envs);
+        self.buffer.clear();
+        self.rollout_log_std = Some(self.agent.log_std.as_tensor().copy()?);
+        let (mut env_s, mut policy_s) = (0.0f64, 0.0f64);
+        for _ in 0..self.cfg.steps_per_env {
+            let policy_start = Instant::now();
+            let raw_privileged = env.privileged_observations().to_vec();
+            self.agent.observe_statistics(env.observations(), &raw_privileged)?;
+            let obs = self.agent.normalize_obs(env.observations());
+            let history = self.agent.normalize_obs(env.obs_histories());
+            let privileged = self.agent.normalize_privileged(&raw_privileged);
+            let act = self.agent.act(&obs, &history, &mut self.rng)?;
+            let values = self.agent.values(&privileged)?;
+            let base_velocity = self.agent.base_velocity(&raw_privileged);
+            policy_s += policy_start.elapsed().as_secs_f64();
+
+            let env_start = Instant::now();
+            let step = env.step(&act.actions)?;
+            env_s += env_start.elapsed().as_secs_f64();
+
+            let next_obs = self.agent.normalize_obs(&step.next_obs_before_reset);
+            let rewards: Vec<f32> = if self.cfg.only_positive_rewards {
+                step.reward.iter().map(|r| r.max(0.0)).collect()
+            } else {
+                step.reward.clone()
+            };
+            self.buffer.push(&StepRecord {
+                obs: &obs,
+                privileged_obs: &privileged,
+                obs_history: &history,
+                context: &act.context,
+                next_obs: &next_obs,
+                base_velocity: &base_velocity,
+                actions: &act.actions,
+                action_means: &act.means,
+                log_probs: &act.log_probs,
+                values: &values,
+                rewards: &rewards,
+                terminated: &step.terminated,
+                truncated: &step.truncated,
+            })?;
+            for episode in step.finished {
+                if self.recent_episodes.len() == EPISODE_WINDOW {
+                    self.recent_episodes.pop_front();
+                }
+                self.recent_episodes.push_back(episode);
+            }
+        }
+        let last_values = self.agent.values(&self.agent.normalize_privileged(env.privileged_observations()))?;
+        self.buffer.compute_returns(&last_values, self.cfg.gamma as f32, self.cfg.gae_lambda as f32)?;
+
+        let mut m = Metrics::new();
+        m.insert("time/env_s".into(), env_s);
+        m.insert("time/policy_s".into(), policy_s);
+        if !self.recent_episodes.is_empty() {
+            let n = self.recent_episodes.len() as f64;
+            let mean = |f: fn(&FinishedEpisode) -> f64| self.recent_episodes.iter().map(f).sum::<f64>() / n;
+            m.insert("charts/episodic_return".into(), mean(|e| e.episode_return));
+            m.insert("charts/episodic_length_s".into(), mean(|e| e.length_s));
+            m.insert("charts/lin_vel_err".into(), mean(|e| e.lin_vel_err));
+            m.insert("charts/ang_vel_err".into(), mean(|e| e.ang_vel_err));
+            m.insert("charts/fall_rate".into(), mean(|e| f64::from(u8::from(e.fell))));
+        }
+        let rewards = &self.buffer.rewards;
+        m.insert("charts/mean_step_reward".into(), rewards.iter().map(|&r| f64::from(r)).sum::<f64>() / rewards.len() as f64);
+        Ok(m)
+    }
+
+    /// The PPO update over the collected rollout; returns the loss metrics
+    /// averaged over minibatches.
+    pub fn update(&mut self) -> anyhow::Result<Metrics> {
+        let b = &self.buffer;
+        let d = b.dims;
+        let rollout_log_std = self.rollout_log_std.clone().ok_or_else(|| anyhow::anyhow!("update called before any rollout"))?;
+        let cfg = &self.cfg;
+        let mut sums = Metrics::new();
+        let mut count = 0.0;
+        for _epoch in 0..cfg.epochs {
+            for indices in minibatch_indices(b.capacity(), cfg.minibatches, &mut self.rng) {
+                let rows = |data: &[f32], width: usize| matrix(&gather_rows(data, width, &indices), width);
+                let column = |data: &[f32]| Tensor::from_vec(gather_rows(data, 1, &indices), indices.len(), &Device::Cpu);
+                let obs = rows(&b.obs, d.obs)?; // (B, obs)
+                let context = rows(&b.context, d.context)?; // (B, context)
+                let actions = rows(&b.actions, d.act)?; // (B, act)
+                let old_means = rows(&b.action_means, d.act)?; // (B, act)
+                let old_log_probs = column(&b.log_probs)?; // (B,)
+                let old_values = column(&b.values)?; // (B,)
+                let returns = column(&b.returns)?; // (B,)
+                let mut advantages = column(&b.advantages)?; // (B,)
+                if cfg.normalize_advantages {
+                    advantages = normalize_advantages(&advantages)?;
+                }
+
+                // Policy: the new means under the rollout's context.
+                let means = self.agent.action_mean(&obs, &context)?;
+                let log_std = self.agent.log_std.as_tensor();
+
+                // Adaptive learning rate from KL(rollout policy || current policy).
+                let kl = f64::from(gaussian_kl(&old_means, &rollout_log_std, &means.detach(), &log_std.detach())?.to_scalar::<f32>()?);
+                if cfg.adaptive_lr {
+                    let lr = adapt_learning_rate(self.optimizer.learning_rate(), kl, cfg.desired_kl, cfg.lr_factor, cfg.min_lr, cfg.max_lr);
+                    self.optimizer.set_learning_rate(lr);
+                }
+
+                let new_log_probs = gaussian_log_prob(&actions, &means, log_std)?;
+                let policy_loss = clipped_surrogate_loss(&new_log_probs, &old_log_probs, &advantages, cfg.clip_ratio)?;
+                let entropy = gaussian_entropy(log_std)?;
+
+                // Critic on the privileged observation.
+                let values = self.agent.value(&rows(&b.privileged_obs, d.privileged_obs)?)?;
+                let clip = cfg.clip_value_loss.then_some(cfg.clip_ratio);
+                let critic_loss = value_loss(&values, &old_values, &returns, clip)?;
+
+                let mut loss = policy_loss
+                    .add(&critic_loss.affine(cfg.value_loss_coef, 0.0)?)?
+                    .sub(&entropy.affine(cfg.entropy_coef, 0.0)?)?;
+
+                // CENet: beta-VAE on the history, velocity target, next observation.
+                if self.agent.use_cenet {
+                    let history = rows(&b.obs_history, d.obs_history)?;
+                    let estimate = self.agent.estimate(&history)?;
+                    let noise = normal_tensor(&mut self.rng, indices.len(), self.agent.latent_dim)?;
+                    let z = reparameterize(&estimate.latent_mean, &estimate.latent_logvar, &noise)?;
+                    let reconstruction = self.agent.decode(&Tensor::cat(&[&estimate.velocity, &z], 1)?)?;
+                    let cenet = cenet_loss(
+                        &estimate,
+                        &rows(&b.base_velocity, 3)?,
+                        &reconstruction,
+                        &rows(&b.next_obs, d.obs)?,
+                        cfg.cenet_beta,
+                    )?;
+                    loss = loss.add(&cenet.total.affine(cfg.cenet_loss_coef, 0.0)?)?;
+                    add(&mut sums, "losses/cenet_velocity", &cenet.velocity_mse)?;
+                    add(&mut sums, "losses/cenet_reconstruction", &cenet.reconstruction_mse)?;
+                    add(&mut sums, "losses/cenet_kl", &cenet.kl)?;
+                }
+
+                // The masks' soft-score entropy term (METHOD 2.3; 0 after E iterations).
+                let soft_score_loss = self.agent.soft_score_loss()?;
+                loss = loss.add(&soft_score_loss)?;
+                add(&mut sums, "losses/soft_score", &soft_score_loss)?;
+
+                // Clip the global norm of the networks' gradients. The soft-score
+                // sigmas are left out: their entropy gradient (beta_H * n / sigma, in
+                // the thousands for a 512x256 layer) would otherwise swamp the norm
+                // and shrink every PPO gradient; Adam is per-element scale-free, so
+                // sigma needs no clipping.
+                let params = self.agent.params();
+                let clipped: Vec<_> = params.iter().filter(|p| !p.name.ends_with(".sigma")).cloned().collect();
+                let mut grads = loss.backward()?;
+                let grad_norm = self.optimizer.clip_grad_norm(&clipped, &mut grads, cfg.max_grad_norm)?;
+                self.optimizer.step(&params, &grads)?;
+
+                add(&mut sums, "losses/policy_loss", &policy_loss)?;
+                add(&mut sums, "losses/value_loss", &critic_loss)?;
+                add(&mut sums, "losses/entropy", &entropy)?;
+                *sums.entry("losses/approx_kl".into()).or_default() += kl;
+                *sums.entry("losses/clipfrac".into()).or_default() +=
+                    f64::from(clip_fraction(&new_log_probs, &old_log_probs, cfg.clip_ratio)?);
+                *sums.entry("losses/grad_norm".into()).or_default() += grad_norm;
+                count += 1.0;
+            }
+        }
+        let mut m: Metrics = sums.into_iter().map(|(k, v)| (k, v / count)).collect();
+        m.insert("charts/learning_rate".into(), self.optimizer.learning_rate());
+        let std = self.agent.log_std.as_tensor().exp()?.mean_all()?.to_scalar::<f32>()?;
+        m.insert("charts/action_std".into(), f64::from(std));
+        Ok(m)
+    }
+}
+
+/// Adds a scalar tensor's value to `sums[name]`.
+fn add(sums: &mut Metrics, name: &str, value: &Tensor) -> anyhow::Result<()> {
+    *sums.entry(name.into()).or_default() += f64::from(value.to_scalar::<f32>()?);
+    Ok(())
+}

@@ -1,0 +1,63 @@
+//! `quadcl train` and `quadcl eval` through the binary: a one-iteration
+//! training run on the simulated robot, then the eval JSON schema.
+
+use std::process::Command;
+
+fn quadcl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_quadcl"))
+}
+
+const TINY: &str = r#"
+seed = 3
+[ppo]
+num_envs = 4
+steps_per_env = 4
+iterations = 1
+minibatches = 2
+epochs = 1
+cenet_decoder_hidden = [16]
+[net.actor]
+hidden = [16]
+[net.critic]
+hidden = [16]
+[net.cenet]
+hidden = [16]
+"#;
+
+#[test]
+fn one_iteration_of_train_then_eval_prints_the_documented_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("tiny.toml");
+    std::fs::write(&config, TINY).unwrap();
+    let out = dir.path().join("run");
+    let status = quadcl().args(["train", "--config"]).arg(&config).arg("--out").arg(&out).status().unwrap();
+    assert!(status.success());
+    for file in ["config.toml", "metrics.jsonl", "summary.json", "policy/manifest.json", "policy/model.safetensors"] {
+        assert!(out.join(file).exists(), "missing {file}");
+    }
+
+    let output = quadcl()
+        .args(["eval", "--policy"])
+        .arg(out.join("policy"))
+        .args(["--task", "none", "--episodes", "2", "--seed", "1", "--json"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let keys: Vec<&str> = report.as_object().unwrap().keys().map(String::as_str).collect();
+    for key in ["task", "episodes", "mean_return", "lin_vel_err", "ang_vel_err", "fall_rate", "survival_s"] {
+        assert!(keys.contains(&key), "missing {key} in {report}");
+    }
+    assert_eq!(report["task"], "none");
+    assert_eq!(report["episodes"], 2);
+    let fall_rate = report["fall_rate"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&fall_rate));
+}
+
+#[test]
+fn eval_of_a_missing_policy_names_the_directory() {
+    let output = quadcl().args(["eval", "--policy", "/nonexistent/policy", "--json"]).output().unwrap();
+    assert!(!output.status.success());
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert!(err.contains("/nonexistent/policy"), "{err}");
+}
