@@ -11,15 +11,20 @@
 //! | [`results`] | steps, evaluation matrix, curves, summary measures (`metrics.json`) |
 //! | [`run_config`] | a run file: experiment config + method + evaluation + sequence |
 //! | [`run_dir`] | a run's output folder: metrics.json, checkpoints, log, resume |
+//! | [`ppo_learner`] | the PPO + CENet agent on the quadruped as a `Learner` |
+//! | [`shift`] | a shifted environment (friction, mass, motor strength, latency) for fine-tuning |
+//! | [`finetune`] | sim-to-real fine-tuning of one learned task (METHOD.md 2.7) |
 //! | [`toy_learner`] | a tiny masked regression learner for fast tests |
 
 pub mod events;
+pub mod finetune;
 pub mod learner;
 pub mod ppo_learner;
 pub mod results;
 pub mod run_config;
 pub mod run_dir;
 pub mod session;
+pub mod shift;
 pub mod toy_learner;
 
 pub use events::{Command, CommandSender, Event, EventLog, Observer};
