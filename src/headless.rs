@@ -145,6 +145,13 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
                 let name = &session.results().steps[step].name;
                 session.learner().save(&dir.checkpoint(step, name), &session.results().tasks)?;
                 dir.write_metrics(&MetricsFile::new(session.results(), total_steps, &reference_curve))?;
+                if cfg.run.keep_last_checkpoint_only && step > 0 {
+                    // Only after metrics.json names the new checkpoint as the last one.
+                    let previous = dir.checkpoint(step - 1, &session.results().steps[step - 1].name);
+                    if previous.exists() {
+                        std::fs::remove_dir_all(&previous).with_context(|| format!("removing {}", previous.display()))?;
+                    }
+                }
                 dir.write_log(&lines.lock().map(|l| l.clone()).unwrap_or_default())?;
                 trained += 1;
             }

@@ -121,3 +121,15 @@ fn a_bad_run_file_writes_nothing() {
     assert!(err.contains("wobble"), "{err}");
     assert!(!out.exists());
 }
+
+#[test]
+fn keeping_only_the_last_checkpoint_still_resumes_identically() {
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = run(&write_run(tmp.path(), RUN), &tmp.path().join("whole"), opts(false, None)).unwrap();
+    let cfg = write_named(tmp.path(), "last.toml", &RUN.replace("learner = \"toy\"", "learner = \"toy\"\nkeep_last_checkpoint_only = true"));
+    let out = tmp.path().join("out");
+    run(&cfg, &out, opts(false, Some(2))).unwrap();
+    let kept: Vec<_> = std::fs::read_dir(out.join("checkpoints")).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(kept, vec![std::ffi::OsString::from("step-01-invert_RR")]);
+    assert_eq!(run(&cfg, &out, opts(true, None)).unwrap(), whole);
+}

@@ -64,6 +64,9 @@ pub struct RunSection {
     /// A policy directory (e.g. `policies/base-a1-flat`) whose networks the
     /// sequence starts from; its tasks are kept (the base task stays recallable).
     pub base_policy: Option<PathBuf>,
+    /// Keep only the newest checkpoint (all a `--resume` needs; it recalls every
+    /// task) instead of one per step, e.g. for a run committed under `policies/`.
+    pub keep_last_checkpoint_only: bool,
 }
 
 /// Everything a run needs.
