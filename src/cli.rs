@@ -24,6 +24,10 @@ pub enum Command {
     Train(crate::cmd::train::TrainArgs),
     /// Evaluate a policy on a task: return, tracking errors, falls (JSON with --json).
     Eval(crate::cmd::eval::EvalArgs),
+    /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
+    Run(crate::cmd::run::RunArgs),
+    /// Sim-to-real fine-tuning of one learned task on a shifted environment (its private parameters only).
+    Finetune(crate::cmd::finetune::FinetuneArgs),
 }
 
 /// Runs the chosen subcommand. Without one, says what there is to run.
@@ -33,6 +37,8 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Masks(args)) => crate::cmd::masks::run(args),
         Some(Command::Train(args)) => crate::cmd::train::run(args),
         Some(Command::Eval(args)) => crate::cmd::eval::run(args),
+        Some(Command::Run(args)) => crate::cmd::run::run(args),
+        Some(Command::Finetune(args)) => crate::cmd::finetune::run(args),
         None => {
             crate::cmd::welcome::run();
             Ok(())

@@ -11,6 +11,8 @@
 //! | [`nn`] | masked networks in candle: `MaskedLinear`, `MaskedMlp`, the masked Adam, checkpoints | `config` |
 //! | [`rl`] | PPO with a privileged critic and a context estimator (CENet), rollouts, GAE, observation normalisation | `config`, `sim`, `nn` |
 //! | [`cl`] | continual learning around the learner: sequences, the continual measures | `config`, `sim`, `nn`, `rl` |
+//! | [`engine`] | the continual-learning engine: a `Session` trains a learner on a sequence step by step and emits events | `config`, `nn`, `rl`, `cl` |
+//! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `engine` |
 //! | [`bench`] | the throughput figures printed by `quadcl bench` | everything |
 //! | [`cmd`] | one file per CLI subcommand, thin glue over the modules above | everything |
 //!
@@ -21,6 +23,8 @@ pub mod cl;
 pub mod cli;
 pub mod cmd;
 pub mod config;
+pub mod engine;
+pub mod headless;
 pub mod nn;
 pub mod rl;
 pub mod sim;

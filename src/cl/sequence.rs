@@ -10,11 +10,14 @@
 //! name = "invert:RR+noise:FR"
 //! related = ["invert:RR", "noise:FR"]  # forward transfer (METHOD.md 2.6)
 //! init = "related"           # related | random | scratch
+//! [task.switches]            # ablation switches for this task only (cl::ours)
+//! reinit = false
 //! ```
 //!
 //! A task name may come back later in the sequence: it is then fine-tuned on
 //! its private parameters only (METHOD.md 2.5).
 
+use super::ours::SwitchOverrides;
 use crate::sim::Perturbation;
 use serde::{Deserialize, Serialize};
 use std::str::FromStr;
@@ -47,6 +50,9 @@ pub struct TaskSpec {
     /// How the soft scores start.
     #[serde(default)]
     pub init: TransferInit,
+    /// Switches of the method changed for this task only (unset ones keep the run's).
+    #[serde(default)]
+    pub switches: SwitchOverrides,
 }
 
 /// A whole sequence, as written in TOML.
@@ -75,6 +81,9 @@ impl Sequence {
             Perturbation::from_str(&task.name).map_err(|e| anyhow::anyhow!("{}: {e}", at()))?;
             if task.iterations == Some(0) {
                 anyhow::bail!("{}: iterations must be at least 1", at());
+            }
+            if task.init == TransferInit::Random && task.related.is_empty() {
+                anyhow::bail!("{}: init = \"random\" draws as many tasks as `related` names, and it names none", at());
             }
             for related in &task.related {
                 let earlier = self.tasks[..i].iter().any(|t| &t.name == related);

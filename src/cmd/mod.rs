@@ -2,6 +2,8 @@
 
 pub mod bench;
 pub mod eval;
+pub mod finetune;
 pub mod masks;
+pub mod run;
 pub mod train;
 pub mod welcome;

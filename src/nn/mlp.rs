@@ -62,6 +62,19 @@ impl MaskedMlp {
         &self.cfg
     }
 
+    /// Replaces the mask settings (capacity, lambda rule, private share, entropy, reinit, ...)
+    /// of the network and every layer, for the NEXT task: only allowed between tasks, so a
+    /// task in progress never sees its rules change. The layers' initialiser bounds stay.
+    pub fn set_mask_config(&mut self, cfg: &MaskConfig) -> anyhow::Result<()> {
+        cfg.validate()?;
+        if let Some(current) = self.current_task() {
+            anyhow::bail!("{}: mask settings changed while task {current} is in progress", self.name);
+        }
+        self.cfg = cfg.clone();
+        self.layers.iter_mut().for_each(|l| l.cfg = cfg.clone());
+        Ok(())
+    }
+
     /// The layers, input first.
     pub fn layers(&self) -> &[MaskedLinear] {
         &self.layers

@@ -1,0 +1,233 @@
+//! The method `ours` (METHOD.md 2.1 to 2.7) and every switch of the paper's
+//! ablations: re-initialisation on/off, entropy on/off (the paper's None /
+//! Reinit / Reinit & Entropy), the lambda mode of the selection (a vacant
+//! share such as 0.25, `free`, `vacant`, `per-layer`), capacity c and
+//! private share p. The switches only translate into the masked networks'
+//! [`MaskConfig`]; the mechanics live in `nn`.
+
+use super::method::ContinualMethod;
+use crate::config::net::{MaskConfig, SelectionRule};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::str::FromStr;
+
+/// How each row's selection splits between vacant and occupied elements (METHOD.md 2.1, Figure 5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LambdaMode {
+    /// The method: round(lambda * k) vacant, the rest occupied; lambda in [0, 1].
+    Share(f64),
+    /// One per-row top-k over vacant and occupied together (WSN-like).
+    Free,
+    /// Vacant elements only.
+    Vacant,
+    /// One top-k over the whole layer (WSN's original rule).
+    PerLayer,
+}
+
+impl FromStr for LambdaMode {
+    type Err = anyhow::Error;
+    fn from_str(s: &str) -> anyhow::Result<Self> {
+        match s {
+            "free" => Ok(Self::Free),
+            "vacant" => Ok(Self::Vacant),
+            "per-layer" => Ok(Self::PerLayer),
+            other => {
+                let v: f64 = other.parse().map_err(|_| {
+                    anyhow::anyhow!("lambda mode {other:?}: expected a vacant share in [0, 1] (e.g. \"0.25\"), \"free\", \"vacant\" or \"per-layer\"")
+                })?;
+                anyhow::ensure!((0.0..=1.0).contains(&v), "lambda mode {other:?}: the vacant share must be in [0, 1]");
+                Ok(Self::Share(v))
+            }
+        }
+    }
+}
+
+impl fmt::Display for LambdaMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Share(v) => write!(f, "{v}"),
+            Self::Free => f.write_str("free"),
+            Self::Vacant => f.write_str("vacant"),
+            Self::PerLayer => f.write_str("per-layer"),
+        }
+    }
+}
+
+impl Serialize for LambdaMode {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+impl<'de> Deserialize<'de> for LambdaMode {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Number(f64),
+            Text(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::Number(v) => LambdaMode::from_str(&v.to_string()),
+            Raw::Text(t) => LambdaMode::from_str(&t),
+        }
+        .map_err(serde::de::Error::custom)
+    }
+}
+
+/// The ablation switches of `ours`, in force for one task.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Switches {
+    /// Re-initialise vacant weights and redraw soft-score means when the task ends (METHOD.md 2.4).
+    pub reinit: bool,
+    /// The soft scores' entropy term during the first E iterations (METHOD.md 2.3).
+    pub entropy: bool,
+    /// The selection rule: a vacant share ("0.25"), "free", "vacant" or "per-layer".
+    pub lambda: LambdaMode,
+    /// Capacity c: the fraction of each row a task selects.
+    pub capacity: f64,
+    /// Private share p: the fraction of a layer made private to the task at its end.
+    pub private_share: f64,
+}
+
+impl Default for Switches {
+    fn default() -> Self {
+        Self::from_mask_config(&MaskConfig::default())
+    }
+}
+
+impl Switches {
+    /// The switches that a mask configuration encodes.
+    pub fn from_mask_config(m: &MaskConfig) -> Self {
+        let lambda = match m.rule {
+            SelectionRule::Split => LambdaMode::Share(m.vacant_share),
+            SelectionRule::Free => LambdaMode::Free,
+            SelectionRule::Vacant => LambdaMode::Vacant,
+            SelectionRule::PerLayer => LambdaMode::PerLayer,
+        };
+        Self { reinit: m.reinit, entropy: m.entropy, lambda, capacity: m.capacity, private_share: m.private_share }
+    }
+
+    /// `base` with these switches applied (every other mask setting kept).
+    pub fn apply(&self, base: &MaskConfig) -> anyhow::Result<MaskConfig> {
+        let mut m = base.clone();
+        m.reinit = self.reinit;
+        m.entropy = self.entropy;
+        m.capacity = self.capacity;
+        m.private_share = self.private_share;
+        match self.lambda {
+            LambdaMode::Share(v) => {
+                m.rule = SelectionRule::Split;
+                m.vacant_share = v;
+            }
+            LambdaMode::Free => m.rule = SelectionRule::Free,
+            LambdaMode::Vacant => m.rule = SelectionRule::Vacant,
+            LambdaMode::PerLayer => m.rule = SelectionRule::PerLayer,
+        }
+        m.validate()?;
+        Ok(m)
+    }
+
+    /// These switches with `over`'s set fields replacing them.
+    pub fn with(&self, over: &SwitchOverrides) -> Self {
+        Self {
+            reinit: over.reinit.unwrap_or(self.reinit),
+            entropy: over.entropy.unwrap_or(self.entropy),
+            lambda: over.lambda.unwrap_or(self.lambda),
+            capacity: over.capacity.unwrap_or(self.capacity),
+            private_share: over.private_share.unwrap_or(self.private_share),
+        }
+    }
+}
+
+/// A partial set of switches: a per-task change in a sequence file, or what a
+/// UI asks for the next task. Unset fields keep the run's switches.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SwitchOverrides {
+    /// See [`Switches::reinit`].
+    pub reinit: Option<bool>,
+    /// See [`Switches::entropy`].
+    pub entropy: Option<bool>,
+    /// See [`Switches::lambda`].
+    pub lambda: Option<LambdaMode>,
+    /// See [`Switches::capacity`].
+    pub capacity: Option<f64>,
+    /// See [`Switches::private_share`].
+    pub private_share: Option<f64>,
+}
+
+impl SwitchOverrides {
+    /// `self` with `later`'s set fields taking precedence.
+    pub fn merged(&self, later: &SwitchOverrides) -> Self {
+        Self {
+            reinit: later.reinit.or(self.reinit),
+            entropy: later.entropy.or(self.entropy),
+            lambda: later.lambda.or(self.lambda),
+            capacity: later.capacity.or(self.capacity),
+            private_share: later.private_share.or(self.private_share),
+        }
+    }
+}
+
+/// The method of the paper: all the work is in the masked networks; its one
+/// hook turns the task's switches into their mask settings.
+#[derive(Debug, Clone, Default)]
+pub struct Ours;
+
+impl ContinualMethod for Ours {
+    fn name(&self) -> &str {
+        "ours"
+    }
+
+    fn task_mask_config(&self, base: &MaskConfig, switches: &Switches) -> anyhow::Result<MaskConfig> {
+        switches.apply(base)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lambda_modes_parse_from_numbers_and_names_and_round_trip() {
+        for text in ["0.25", "free", "vacant", "per-layer", "1"] {
+            let m: LambdaMode = text.parse().unwrap();
+            assert_eq!(m.to_string().parse::<LambdaMode>().unwrap(), m);
+        }
+        let s: Switches = toml::from_str("lambda = 0.5\n").unwrap();
+        assert_eq!(s.lambda, LambdaMode::Share(0.5));
+        let err = "1.5".parse::<LambdaMode>().unwrap_err().to_string();
+        assert!(err.contains("[0, 1]"), "{err}");
+        assert!("sometimes".parse::<LambdaMode>().unwrap_err().to_string().contains("free"));
+    }
+
+    #[test]
+    fn switches_round_trip_through_the_mask_config() {
+        let s = Switches { reinit: false, entropy: false, lambda: LambdaMode::Free, capacity: 0.3, private_share: 0.05 };
+        let m = s.apply(&MaskConfig::default()).unwrap();
+        assert_eq!((m.reinit, m.entropy, m.rule, m.capacity, m.private_share), (false, false, SelectionRule::Free, 0.3, 0.05));
+        assert_eq!(Switches::from_mask_config(&m), s);
+        assert_eq!(m.sigma_decay, MaskConfig::default().sigma_decay, "other settings are kept");
+    }
+
+    #[test]
+    fn overrides_replace_only_the_fields_they_set() {
+        let base = Switches::default();
+        let over = SwitchOverrides { reinit: Some(false), ..Default::default() };
+        let s = base.with(&over);
+        assert!(!s.reinit);
+        assert_eq!(s.entropy, base.entropy);
+        let later = SwitchOverrides { reinit: Some(true), capacity: Some(0.1), ..Default::default() };
+        let m = over.merged(&later);
+        assert_eq!((m.reinit, m.capacity), (Some(true), Some(0.1)));
+    }
+
+    #[test]
+    fn an_out_of_range_capacity_is_an_error_naming_the_key() {
+        let s = Switches { capacity: 2.0, ..Default::default() };
+        let err = s.apply(&MaskConfig::default()).unwrap_err().to_string();
+        assert!(err.contains("capacity"), "{err}");
+    }
+}

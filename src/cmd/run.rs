@@ -1,0 +1,43 @@
+//! `quadcl run --config FILE --out DIR [--resume]`: trains a task sequence
+//! headless (see `headless`), then prints the summary measures.
+
+use clap::Args;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Run file (TOML): experiment config, [method], [eval], [run] and the [[task]] sequence.
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Output folder: metrics.json, checkpoints/, log.txt, run.toml.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Continue an interrupted run in --out from its last completed task.
+    #[arg(long)]
+    pub resume: bool,
+    /// Stop after this many completed tasks (continue later with --resume).
+    #[arg(long)]
+    pub stop_after: Option<usize>,
+}
+
+pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    let m = crate::headless::run(
+        &args.config,
+        &args.out,
+        crate::headless::RunOptions { resume: args.resume, progress: std::io::stderr().is_terminal(), stop_after: args.stop_after },
+    )?;
+    let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
+    println!(
+        "{} steps of {} ({}): average performance {}, forgetting {}, plasticity {}, forward transfer {}; results in {}",
+        m.completed_steps,
+        m.total_steps,
+        m.method,
+        show(m.average_performance),
+        show(m.forgetting),
+        show(m.plasticity),
+        show(m.forward_transfer_mean),
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,81 @@
+//! Sim-to-real fine-tuning (METHOD.md 2.7, `quadcl finetune`): one learned
+//! task of a policy directory trains again on a shifted environment; only
+//! its PRIVATE elements, its biases, its action std and its observation
+//! statistics move (the masked networks' fine-tune mode). Every other task's
+//! outputs are bit-identical before and after: the report shows their
+//! evaluations side by side.
+
+use super::learner::{Evaluation, Learner, TaskStart};
+use super::ppo_learner::PpoTaskLearner;
+use super::session::derive_seed;
+use super::shift::Shift;
+use crate::util::write_atomic;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+const FINETUNE_SEED: u64 = 20;
+const EVAL_SEED: u64 = 21;
+
+/// What `finetune.json` (beside the new policy) holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FinetuneReport {
+    pub task: String,
+    pub shift: Shift,
+    pub iterations: usize,
+    /// Every task evaluated in the shifted environment before fine-tuning.
+    pub before: Vec<Evaluation>,
+    /// The same evaluations (same seeds) after.
+    pub after: Vec<Evaluation>,
+    /// Tasks other than `task` whose evaluation changed (must be empty).
+    pub changed_other_tasks: Vec<String>,
+    /// Per iteration, `charts/performance`.
+    pub curve: Vec<f64>,
+}
+
+/// Fine-tunes task `task` of the policy in `policy` on `shift` and writes the
+/// new policy directory `out` (with `finetune.json`). `iterations` overrides the shift file's.
+pub fn finetune(policy: &Path, task: &str, shift: &Shift, out: &Path, seed: u64, episodes: usize, progress: bool) -> anyhow::Result<FinetuneReport> {
+    shift.validate()?;
+    anyhow::ensure!(out != policy, "--out must be a new directory, not the policy itself");
+    anyhow::ensure!(!out.join(crate::nn::checkpoint::MANIFEST_FILE).exists(), "{} already holds a policy", out.display());
+    let (mut learner, tasks) = PpoTaskLearner::from_policy(policy, episodes)?;
+    let id = tasks.iter().position(|t| t == task).ok_or_else(|| {
+        anyhow::anyhow!("{}: no task {task:?} to fine-tune; it has {tasks:?} (fine-tuning trains a learned task's private parameters)", policy.display())
+    })?;
+    learner.set_shift(shift);
+    let evaluate_all = |learner: &mut PpoTaskLearner| -> anyhow::Result<Vec<Evaluation>> {
+        let learned: Vec<usize> = (0..tasks.len()).filter(|&t| learner.has_task(t)).collect();
+        learned.into_iter().map(|t| learner.evaluate(t, &tasks[t], derive_seed(seed, EVAL_SEED, t as u64))).collect()
+    };
+    let before = evaluate_all(&mut learner)?;
+    let start = TaskStart {
+        step: 0,
+        task: id,
+        name: task.to_string(),
+        related: Vec::new(),
+        mask: learner.mask_config(),
+        iterations: shift.iterations,
+        seed: derive_seed(seed, FINETUNE_SEED, 0),
+    };
+    learner.begin_task(&start)?;
+    let bar = if progress { ProgressBar::new(shift.iterations as u64) } else { ProgressBar::hidden() };
+    bar.set_style(ProgressStyle::with_template("{elapsed_precise} finetune [{bar:30}] {pos}/{len} it  {msg}").expect("a valid template").progress_chars("=> "));
+    let mut curve = Vec::new();
+    for _ in 0..shift.iterations {
+        let m = learner.train_iteration()?;
+        if let Some(p) = m.get("charts/performance") {
+            curve.push(*p);
+            bar.set_message(format!("performance {p:.3}"));
+        }
+        bar.inc(1);
+    }
+    bar.finish();
+    learner.end_task()?;
+    let after = evaluate_all(&mut learner)?;
+    let changed_other_tasks = before.iter().zip(&after).filter(|(b, a)| b.task != task && b != a).map(|(b, _)| b.task.clone()).collect();
+    learner.save(out, &tasks)?;
+    let report = FinetuneReport { task: task.to_string(), shift: shift.clone(), iterations: shift.iterations, before, after, changed_other_tasks, curve };
+    write_atomic(&out.join("finetune.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+    Ok(report)
+}

@@ -1,0 +1,123 @@
+//! What a session has produced so far: one record per training step, the
+//! evaluation matrix, every evaluation, and the training curves. This is the
+//! body of `metrics.json`, and what `--resume` reads back.
+
+use super::learner::{Evaluation, Metrics};
+use crate::cl::metrics::{forward_transfer, EvalMatrix};
+use crate::cl::ours::Switches;
+use crate::nn::TaskId;
+use serde::{Deserialize, Serialize};
+
+/// One training step as it ran.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StepRecord {
+    pub step: usize,
+    pub task: TaskId,
+    pub name: String,
+    pub iterations: usize,
+    /// The switches in force for this step.
+    pub switches: Switches,
+    /// The related tasks whose masks seeded the soft scores (after `random` drawing).
+    pub related: Vec<TaskId>,
+    /// A repeat of a finished task: only its private parameters trained.
+    pub fine_tune: bool,
+}
+
+/// A training step's curves, one value per iteration.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TaskCurve {
+    pub step: usize,
+    pub task: TaskId,
+    pub name: String,
+    /// Normalised performance (`charts/performance`).
+    pub performance: Vec<f64>,
+    /// `charts/episodic_return`.
+    pub episodic_return: Vec<f64>,
+    /// `charts/lin_vel_err`, m/s.
+    pub lin_vel_err: Vec<f64>,
+    /// `charts/ang_vel_err`, rad/s.
+    pub ang_vel_err: Vec<f64>,
+}
+
+impl TaskCurve {
+    /// Appends one iteration's metrics; a metric that is missing or not finite is skipped.
+    pub fn push(&mut self, m: &Metrics) {
+        let put = |v: &mut Vec<f64>, key: &str| {
+            if let Some(x) = m.get(key).filter(|x| x.is_finite()) {
+                v.push(*x);
+            }
+        };
+        put(&mut self.performance, "charts/performance");
+        put(&mut self.episodic_return, "charts/episodic_return");
+        put(&mut self.lin_vel_err, "charts/lin_vel_err");
+        put(&mut self.ang_vel_err, "charts/ang_vel_err");
+    }
+}
+
+/// Everything a session has produced.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SessionResults {
+    /// The method's name.
+    pub method: String,
+    /// Distinct task names (the learner's task ids, the matrix's columns).
+    pub tasks: Vec<String>,
+    /// The completed training steps.
+    pub steps: Vec<StepRecord>,
+    /// R[i][j]: performance on task j after step i.
+    pub eval_matrix: EvalMatrix,
+    /// Every evaluation after each step (the tracking errors, fall rates, ...).
+    pub evaluations: Vec<Vec<Evaluation>>,
+    /// Per step, the training curves.
+    pub curves: Vec<TaskCurve>,
+}
+
+/// The summary figures of `metrics.json` (METHOD.md 4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    pub average_performance: Option<f64>,
+    pub forgetting: Option<f64>,
+    pub forgetting_per_task: Vec<Option<f64>>,
+    pub plasticity: Option<f64>,
+    /// Per distinct task: forward transfer against the reference curve of the
+    /// same task trained alone from scratch (null without a reference).
+    pub forward_transfer: Vec<Option<f64>>,
+    /// Mean forward transfer over the tasks that have one.
+    pub forward_transfer_mean: Option<f64>,
+    /// Per distinct task, at the end of the sequence: mean |v_xy - v_cmd| (m/s).
+    pub final_lin_vel_err: Vec<Option<f64>>,
+    /// Per distinct task, at the end of the sequence: mean |w_z - w_cmd| (rad/s).
+    pub final_ang_vel_err: Vec<Option<f64>>,
+    /// Per distinct task, at the end of the sequence: fall rate.
+    pub final_fall_rate: Vec<Option<f64>>,
+}
+
+impl SessionResults {
+    /// The summary measures; `reference` gives per task name a from-scratch curve.
+    pub fn summary(&self, reference: &dyn Fn(&str) -> Option<Vec<f64>>) -> Summary {
+        let m = &self.eval_matrix;
+        let forward: Vec<Option<f64>> = self
+            .tasks
+            .iter()
+            .map(|name| {
+                let curve = self.curves.iter().find(|c| &c.name == name)?;
+                forward_transfer(&curve.performance, &reference(name)?)
+            })
+            .collect();
+        let known: Vec<f64> = forward.iter().flatten().copied().collect();
+        let last = self.evaluations.last();
+        let final_of = |f: &dyn Fn(&Evaluation) -> f64| -> Vec<Option<f64>> {
+            self.tasks.iter().map(|name| last.and_then(|l| l.iter().find(|e| &e.task == name)).map(f)).collect()
+        };
+        Summary {
+            average_performance: m.average_performance(),
+            forgetting: m.forgetting(),
+            forgetting_per_task: m.forgetting_per_task(),
+            plasticity: m.plasticity(),
+            forward_transfer_mean: (!known.is_empty()).then(|| known.iter().sum::<f64>() / known.len() as f64),
+            forward_transfer: forward,
+            final_lin_vel_err: final_of(&|e| e.lin_vel_err),
+            final_ang_vel_err: final_of(&|e| e.ang_vel_err),
+            final_fall_rate: final_of(&|e| e.fall_rate),
+        }
+    }
+}

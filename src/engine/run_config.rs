@@ -1,0 +1,187 @@
+//! A run file (`quadcl run --config FILE`): one TOML file holding the
+//! experiment [`Config`] (`seed`, `[env]`, `[net]`, `[ppo]`), the method and
+//! its switches (`[method]`), the evaluation (`[eval]`), the learner and the
+//! forward-transfer reference (`[run]`), and the sequence (`iterations`,
+//! `[[task]]`, see `cl::sequence`).
+//!
+//! ```toml
+//! seed = 1
+//! iterations = 300            # default budget per task
+//! [method]
+//! name = "ours"
+//! reinit = true               # switches of cl::ours; unset ones follow [net.mask]
+//! lambda = "0.25"
+//! [eval]
+//! episodes = 16
+//! [[task]]
+//! name = "crash:FL"
+//! ```
+//!
+//! Every key is optional except the tasks; an unknown key is an error naming
+//! the file and the key.
+
+use crate::cl::ours::{SwitchOverrides, Switches};
+use crate::cl::sequence::Sequence;
+use crate::config::Config;
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Which learner a run trains.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LearnerKind {
+    /// PPO + CENet on the simulated quadruped (issue 4).
+    #[default]
+    Ppo,
+    /// The tiny masked regression learner (tests, trying the engine).
+    Toy,
+}
+
+/// `[eval]`: how every learned task is evaluated after every task.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EvalConfig {
+    /// Episodes per evaluation (one per parallel environment).
+    pub episodes: usize,
+}
+
+impl Default for EvalConfig {
+    fn default() -> Self {
+        Self { episodes: 16 }
+    }
+}
+
+/// `[run]`: the learner and where its knowledge starts.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RunSection {
+    /// `ppo` (the quadruped) or `toy` (the masked regression learner).
+    pub learner: LearnerKind,
+    /// A `metrics.json` of single-task runs from scratch: its curves are the
+    /// forward-transfer references (METHOD.md 4); without it forward transfer is null.
+    pub reference: Option<PathBuf>,
+    /// A policy directory (e.g. `policies/base-a1-flat`) whose networks the
+    /// sequence starts from; its tasks are kept (the base task stays recallable).
+    pub base_policy: Option<PathBuf>,
+    /// Keep only the newest checkpoint (all a `--resume` needs; it recalls every
+    /// task) instead of one per step, e.g. for a run committed under `policies/`.
+    pub keep_last_checkpoint_only: bool,
+}
+
+/// Everything a run needs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunConfig {
+    /// Seed, environment, networks, PPO.
+    pub config: Config,
+    /// The method's name (`ours`).
+    pub method: String,
+    /// The run's switches ([net.mask] with `[method]`'s changes).
+    pub switches: Switches,
+    pub eval: EvalConfig,
+    pub run: RunSection,
+    pub sequence: Sequence,
+}
+
+impl RunConfig {
+    /// Reads and checks a run file; errors name the file and the key.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading run config {}", path.display()))?;
+        let mut cfg = Self::from_toml_str(&text).with_context(|| format!("in run config {}", path.display()))?;
+        // Relative paths inside the file are relative to the file's folder when they exist there.
+        let base = path.parent().unwrap_or(Path::new("."));
+        for p in [&mut cfg.run.reference, &mut cfg.run.base_policy].into_iter().flatten() {
+            if p.is_relative() && !p.exists() && base.join(&*p).exists() {
+                *p = base.join(&*p);
+            }
+        }
+        Ok(cfg)
+    }
+
+    /// Parses run-file text.
+    pub fn from_toml_str(text: &str) -> anyhow::Result<Self> {
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let mut take = |key: &str| table.remove(key);
+        let method_value = take("method");
+        let eval_value = take("eval");
+        let run_value = take("run");
+        let mut sequence_table = toml::Table::new();
+        for key in ["iterations", "task"] {
+            if let Some(v) = take(key) {
+                sequence_table.insert(key.into(), v);
+            }
+        }
+        let config: Config = toml::Value::Table(table).try_into().map_err(|e| anyhow::anyhow!("{e}"))?;
+        if !sequence_table.contains_key("task") {
+            anyhow::bail!("the run has no [[task]] entries");
+        }
+        let sequence: Sequence = toml::Value::Table(sequence_table).try_into().map_err(|e| anyhow::anyhow!("in [[task]]: {e}"))?;
+        sequence.validate()?;
+        let (method, overrides) = match method_value {
+            None => ("ours".to_string(), SwitchOverrides::default()),
+            Some(toml::Value::Table(mut t)) => {
+                let name = match t.remove("name") {
+                    None => "ours".to_string(),
+                    Some(toml::Value::String(s)) => s,
+                    Some(other) => anyhow::bail!("[method] name = {other}: expected a string"),
+                };
+                let o: SwitchOverrides = toml::Value::Table(t).try_into().map_err(|e| anyhow::anyhow!("in [method]: {e}"))?;
+                (name, o)
+            }
+            Some(other) => anyhow::bail!("method = {other}: expected a [method] table"),
+        };
+        crate::cl::method::method_by_name(&method)?;
+        let switches = Switches::from_mask_config(&config.net.mask).with(&overrides);
+        switches.apply(&config.net.mask).context("in [method]")?;
+        let eval: EvalConfig = match eval_value {
+            Some(v) => v.try_into().map_err(|e| anyhow::anyhow!("in [eval]: {e}"))?,
+            None => EvalConfig::default(),
+        };
+        anyhow::ensure!(eval.episodes > 0, "[eval] episodes must be at least 1");
+        let run: RunSection = match run_value {
+            Some(v) => v.try_into().map_err(|e| anyhow::anyhow!("in [run]: {e}"))?,
+            None => RunSection::default(),
+        };
+        Ok(Self { config, method, switches, eval, run, sequence })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SMALL: &str = "seed = 4\niterations = 3\n[method]\nreinit = false\nlambda = \"free\"\n[run]\nlearner = \"toy\"\n[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n[task.switches]\nentropy = false\n";
+
+    #[test]
+    fn a_run_file_splits_into_config_method_and_sequence() {
+        let r = RunConfig::from_toml_str(SMALL).unwrap();
+        assert_eq!(r.config.seed, 4);
+        assert_eq!(r.method, "ours");
+        assert!(!r.switches.reinit);
+        assert_eq!(r.switches.lambda, crate::cl::ours::LambdaMode::Free);
+        assert_eq!(r.run.learner, LearnerKind::Toy);
+        assert_eq!(r.sequence.tasks.len(), 2);
+        assert_eq!(r.sequence.iterations_of(1), 3);
+        assert_eq!(r.sequence.tasks[1].switches.entropy, Some(false));
+    }
+
+    #[test]
+    fn unknown_keys_are_errors_naming_the_key() {
+        for (text, key) in [
+            ("sede = 1\n[[task]]\nname = \"none\"\n", "sede"),
+            ("[method]\nrenit = true\n[[task]]\nname = \"none\"\n", "renit"),
+            ("[eval]\nepisode = 3\n[[task]]\nname = \"none\"\n", "episode"),
+            ("[[task]]\nname = \"none\"\nswitches = { capacty = 0.1 }\n", "capacty"),
+        ] {
+            let err = format!("{:#}", RunConfig::from_toml_str(text).unwrap_err());
+            assert!(err.contains(key), "{key}: {err}");
+        }
+    }
+
+    #[test]
+    fn a_run_without_tasks_or_with_an_unknown_method_is_an_error() {
+        assert!(format!("{:#}", RunConfig::from_toml_str("seed = 1\n").unwrap_err()).contains("[[task]]"));
+        let err = format!("{:#}", RunConfig::from_toml_str("[method]\nname = \"ewc\"\n[[task]]\nname = \"none\"\n").unwrap_err());
+        assert!(err.contains("ewc"), "{err}");
+    }
+}

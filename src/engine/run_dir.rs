@@ -1,0 +1,149 @@
+//! A run's output folder (`quadcl run --out DIR`):
+//!
+//! - `run.toml`: a copy of the run file (a resumed run must match it);
+//! - `metrics.json`: the measures and everything needed to resume (see [`MetricsFile`]);
+//! - `checkpoints/step-NN-TASK/`: the learner after each completed step (a policy directory);
+//! - `log.txt`: one line per task start/end and evaluation.
+//!
+//! After each step the checkpoint is written first, then `metrics.json`;
+//! both atomically, so an interruption at any moment leaves a folder that
+//! `--resume` continues from the last step `metrics.json` records.
+
+use super::learner::Evaluation;
+use super::results::{SessionResults, StepRecord, TaskCurve};
+use crate::cl::metrics::EvalMatrix;
+use crate::util::write_atomic;
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+pub const METRICS_FILE: &str = "metrics.json";
+pub const RUN_FILE: &str = "run.toml";
+pub const LOG_FILE: &str = "log.txt";
+pub const CHECKPOINTS: &str = "checkpoints";
+
+/// Command tracking at the end of the run, per distinct task (METHOD.md 4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CommandTracking {
+    /// Mean |v_xy - v_cmd| (m/s) per task, after the last completed step.
+    pub lin_vel_err: Vec<Option<f64>>,
+    /// Mean |w_z - w_cmd| (rad/s) per task.
+    pub ang_vel_err: Vec<Option<f64>>,
+    /// Fall rate per task.
+    pub fall_rate: Vec<Option<f64>>,
+}
+
+/// The content of `metrics.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MetricsFile {
+    pub method: String,
+    /// Distinct task names (columns of `eval_matrix.rows`).
+    pub tasks: Vec<String>,
+    pub completed_steps: usize,
+    pub total_steps: usize,
+    /// R[i][j] (`rows`), with the task trained at each step (`trained`).
+    pub eval_matrix: EvalMatrix,
+    pub average_performance: Option<f64>,
+    pub forgetting: Option<f64>,
+    pub forgetting_per_task: Vec<Option<f64>>,
+    pub plasticity: Option<f64>,
+    /// Per task, against the `[run] reference` curves; null without one.
+    pub forward_transfer: Vec<Option<f64>>,
+    pub forward_transfer_mean: Option<f64>,
+    pub command_tracking: CommandTracking,
+    /// The steps as they ran (switches, related tasks, repeats).
+    pub steps: Vec<StepRecord>,
+    /// Every evaluation after every step.
+    pub evaluations: Vec<Vec<Evaluation>>,
+    /// Per step, the training curves.
+    pub curves: Vec<TaskCurve>,
+}
+
+impl MetricsFile {
+    /// The file for `results` of a sequence of `total_steps`; `reference` gives from-scratch curves by task name.
+    pub fn new(results: &SessionResults, total_steps: usize, reference: &dyn Fn(&str) -> Option<Vec<f64>>) -> Self {
+        let s = results.summary(reference);
+        Self {
+            method: results.method.clone(),
+            tasks: results.tasks.clone(),
+            completed_steps: results.steps.len(),
+            total_steps,
+            eval_matrix: results.eval_matrix.clone(),
+            average_performance: s.average_performance,
+            forgetting: s.forgetting,
+            forgetting_per_task: s.forgetting_per_task,
+            plasticity: s.plasticity,
+            forward_transfer: s.forward_transfer,
+            forward_transfer_mean: s.forward_transfer_mean,
+            command_tracking: CommandTracking { lin_vel_err: s.final_lin_vel_err, ang_vel_err: s.final_ang_vel_err, fall_rate: s.final_fall_rate },
+            steps: results.steps.clone(),
+            evaluations: results.evaluations.clone(),
+            curves: results.curves.clone(),
+        }
+    }
+
+    /// The session results this file records.
+    pub fn results(&self) -> SessionResults {
+        SessionResults {
+            method: self.method.clone(),
+            tasks: self.tasks.clone(),
+            steps: self.steps.clone(),
+            eval_matrix: self.eval_matrix.clone(),
+            evaluations: self.evaluations.clone(),
+            curves: self.curves.clone(),
+        }
+    }
+
+    /// Reads a `metrics.json`; errors name the file.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))
+    }
+
+    /// The per-step curves of normalised performance, by task name (first training of each).
+    pub fn reference_curve(&self, task: &str) -> Option<Vec<f64>> {
+        self.curves.iter().find(|c| c.name == task).map(|c| c.performance.clone())
+    }
+}
+
+/// The output folder of a run.
+#[derive(Debug, Clone)]
+pub struct RunDir {
+    pub root: PathBuf,
+}
+
+impl RunDir {
+    pub fn new(root: &Path) -> Self {
+        Self { root: root.to_path_buf() }
+    }
+
+    pub fn metrics_path(&self) -> PathBuf {
+        self.root.join(METRICS_FILE)
+    }
+
+    /// The checkpoint folder of step `step` (0-based) training `task`.
+    pub fn checkpoint(&self, step: usize, task: &str) -> PathBuf {
+        let safe: String = task.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+        self.root.join(CHECKPOINTS).join(format!("step-{step:02}-{safe}"))
+    }
+
+    /// Whether the folder already holds a run.
+    pub fn has_run(&self) -> bool {
+        self.metrics_path().exists() || self.root.join(RUN_FILE).exists()
+    }
+
+    /// Writes `metrics.json` atomically.
+    pub fn write_metrics(&self, metrics: &MetricsFile) -> anyhow::Result<()> {
+        write_atomic(&self.metrics_path(), serde_json::to_string_pretty(metrics)?.as_bytes())
+    }
+
+    /// Writes the log atomically.
+    pub fn write_log(&self, log: &str) -> anyhow::Result<()> {
+        write_atomic(&self.root.join(LOG_FILE), log.as_bytes())
+    }
+
+    /// The existing log (empty when there is none).
+    pub fn read_log(&self) -> String {
+        std::fs::read_to_string(self.root.join(LOG_FILE)).unwrap_or_default()
+    }
+}
