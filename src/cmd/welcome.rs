@@ -1,13 +1,20 @@
-//! What `quadcl` prints when run without a subcommand.
+//! What `quadcl` prints when run without a subcommand (`cargo run --release`).
+//! The terminal workbench (TUI) will open here once it exists; until then it
+//! says what there is to run, with commands that work from the repository root.
 
-/// Prints what there is to run. (The TUI will open here once it exists.)
+/// Prints what there is to run.
 pub fn run() {
     println!(
         "quadcl {}: continual reinforcement learning on a simulated quadruped.\n\n\
-         There is no terminal workbench (TUI) yet. Things to run now:\n\
-         \x20 quadcl bench            throughput of the simulator and of the masked networks\n\
-         \x20 quadcl masks --policy DIR   which parameters each task of a policy claims\n\
-         \x20 quadcl --help           every subcommand\n",
+         There is no terminal workbench (TUI) yet. Things to run now (cargo run --release -- ...):\n\
+         \x20 run --config scenes/smoke.toml --out runs/smoke    a 3-task sequence in seconds: metrics.json, checkpoints\n\
+         \x20 train --config scenes/train-base.toml --out runs/base [--resume]   the base walking policy (long)\n\
+         \x20 eval --policy DIR --task none --episodes 32 --json     return, tracking errors, fall rate\n\
+         \x20 masks --policy DIR [--json]                           which parameters each task claims\n\
+         \x20 finetune --policy DIR --task TASK --shift FILE --out DIR   private-parameter fine-tuning\n\
+         \x20 bench [--json]                                        simulator and network throughput\n\
+         \x20 --help                                                every subcommand and option\n\n\
+         Tasks are named like `none`, `crash:FL`, `invert:RR+noise:FR` (legs FL FR RL RR).",
         env!("CARGO_PKG_VERSION")
     );
 }
