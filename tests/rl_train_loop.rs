@@ -81,7 +81,6 @@ fn a_trained_toy_policy_evaluates_better_than_an_untrained_one() {
     let trained = load_policy(&dir.path().join("policy"), None).unwrap().agent;
     let mut untrained = Agent::new(env.dims(), &cfg, 99).unwrap();
     untrained.begin_task(0, &[]).unwrap();
-    // Not a mock StepRng: its counting "random" bits make the normal sampler spin for minutes.
     untrained.begin_iteration(0, &mut <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(1)).unwrap();
     let eval = |agent: &Agent| evaluate(agent, &mut ToyEnv::new(64, 10, 3), "none", 3, 100).unwrap();
     let (good, bad) = (eval(&trained), eval(&untrained));
