@@ -150,3 +150,49 @@ fn saving_a_task_without_a_name_is_an_error_not_a_policy_that_cannot_load() {
     let err = save_policy(dir.path(), &["none".into()], &[&net], &BTreeMap::new(), &serde_json::Value::Null).unwrap_err().to_string();
     assert!(err.contains("task 1") && err.contains("no name"), "{err}");
 }
+
+/// The layer trains ln sigma and saves it as "{layer}.log_sigma" (restored exactly); a policy
+/// written before that holds "{layer}.sigma" instead, which still loads (as its ln).
+#[test]
+fn log_sigma_round_trips_exactly_and_files_with_the_older_sigma_tensor_still_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = trained_policy(dir.path());
+    let loaded = load_policy(dir.path()).unwrap();
+    for (a, b) in net.layers().iter().zip(loaded.network("net").unwrap().layers()) {
+        assert_eq!(a.log_sigma().unwrap().to_bits(), b.log_sigma().unwrap().to_bits(), "{}", a.name());
+    }
+
+    // Rewrite model.safetensors the older way: "{layer}.sigma" = sigma, no "{layer}.log_sigma".
+    let path = dir.path().join(MODEL_FILE);
+    let bytes = std::fs::read(&path).unwrap();
+    let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+    let mut owned: Vec<(String, safetensors::Dtype, Vec<usize>, Vec<u8>)> = Vec::new();
+    for (name, t) in st.tensors() {
+        match name.strip_suffix(".log_sigma") {
+            Some(layer) => {
+                let ln = f32::from_le_bytes(t.data().try_into().unwrap());
+                owned.push((format!("{layer}.sigma"), t.dtype(), t.shape().to_vec(), ln.exp().to_le_bytes().to_vec()));
+            }
+            None => owned.push((name.clone(), t.dtype(), t.shape().to_vec(), t.data().to_vec())),
+        }
+    }
+    let views: Vec<_> = owned.iter().map(|(n, d, s, b)| (n.clone(), safetensors::tensor::TensorView::new(*d, s.clone(), b).unwrap())).collect();
+    let legacy = safetensors::serialize(views, None).unwrap();
+    std::fs::write(&path, &legacy).unwrap();
+    let (old_hash, new_hash) = (quadcl::util::sha256_hex(&bytes), quadcl::util::sha256_hex(&legacy));
+    edit_manifest(dir.path(), |m| m["files"][MODEL_FILE] = serde_json::Value::String(new_hash.clone()));
+    assert_ne!(old_hash, new_hash);
+
+    let policy = load_policy(dir.path()).unwrap();
+    for (a, b) in net.layers().iter().zip(policy.network("net").unwrap().layers()) {
+        let (want, got) = (a.sigma().unwrap(), b.sigma().unwrap());
+        assert!((got / want - 1.0).abs() < 1e-5, "{}: sigma {got} loaded from the older file, saved {want}", a.name());
+    }
+    // Without either tensor the error names the new one.
+    let views: Vec<_> = owned.iter().filter(|(n, ..)| !n.ends_with(".sigma")).map(|(n, d, s, b)| (n.clone(), safetensors::tensor::TensorView::new(*d, s.clone(), b).unwrap())).collect();
+    let missing = safetensors::serialize(views, None).unwrap();
+    std::fs::write(&path, &missing).unwrap();
+    edit_manifest(dir.path(), |m| m["files"][MODEL_FILE] = serde_json::Value::String(quadcl::util::sha256_hex(&missing)));
+    let err = load_error(dir.path());
+    assert!(err.contains("missing tensor net.l0.log_sigma"), "{err}");
+}

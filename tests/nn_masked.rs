@@ -81,7 +81,9 @@ fn entropy_term_widens_sigma_then_sigma_decays_to_its_floor() {
     let cfg = MaskConfig { entropy_iterations: 20, entropy_weight: 1.0, ..MaskConfig::default() };
     let (mut net, mut rng) = net_after(0, &cfg);
     net.begin_task(0, &[]).unwrap();
-    let mut opt = MaskedAdam::new(AdamConfig::default());
+    // The layer trains ln sigma, which Adam moves by about lr per step: with one step per
+    // iteration a large lr is needed to widen sigma visibly within E = 20 iterations.
+    let mut opt = MaskedAdam::new(AdamConfig { learning_rate: 0.05, ..AdamConfig::default() });
     let mut sigmas = Vec::new();
     for it in 0..400 {
         net.begin_iteration(it, &mut rng).unwrap();
@@ -98,7 +100,53 @@ fn entropy_term_widens_sigma_then_sigma_decays_to_its_floor() {
     }
     assert!(sigmas[19] > sigmas[0] * 1.5, "sigma did not widen: {} -> {}", sigmas[0], sigmas[19]);
     assert!((sigmas[25] / sigmas[24] - 0.99).abs() < 1e-4, "no 0.99 decay after E");
-    assert_eq!(*sigmas.last().unwrap(), cfg.sigma_floor as f32);
+    // The floor is applied to ln sigma, so exp(ln floor) matches the floor to f32 rounding only.
+    let last = *sigmas.last().unwrap();
+    assert!((last / cfg.sigma_floor as f32 - 1.0).abs() < 1e-5, "sigma ends at {last}, not its floor {}", cfg.sigma_floor);
+}
+
+/// The bug: sigma was a raw variable, only clamped to [floor, max] once per iteration, and
+/// the 10-20 Adam steps of one PPO update (each about lr = 1e-3, sigma starting at 0.005)
+/// drove it negative: ln sigma in the soft-score loss became NaN and S = mu + sigma * eps
+/// flipped sign. sigma is now exp(log_sigma): many Adam steps within one iteration, with a
+/// large entropy weight and a loss that pushes sigma down, never give sigma <= 0 or a NaN.
+#[test]
+fn soft_score_sigma_stays_positive_and_finite_under_many_adam_steps() {
+    let cfg = MaskConfig { entropy_iterations: 1000, entropy_weight: 10.0, ..MaskConfig::default() };
+    let (mut net, mut rng) = net_after(0, &cfg);
+    net.begin_task(0, &[]).unwrap();
+    let mut opt = MaskedAdam::new(AdamConfig::default());
+    let mut lowest = f32::INFINITY;
+    for it in 0..3 {
+        net.begin_iteration(it, &mut rng).unwrap();
+        let start: Vec<f32> = net.layers().iter().map(|l| l.sigma().unwrap()).collect();
+        for step in 0..1000 {
+            let params = net.params();
+            assert!(params.iter().any(|p| p.name.ends_with("sigma")), "sigma is not trained at iteration {it}");
+            let soft = net.soft_score_loss().unwrap();
+            let soft_value = soft.to_scalar::<f32>().unwrap();
+            assert!(soft_value.is_finite(), "soft-score loss {soft_value} at iteration {it}, step {step}");
+            // A penalty on the effective weights W * M_ste: its straight-through gradient on sigma
+            // is sum(2 W^2 M eps), positive because the selected elements are those with large eps,
+            // so it pushes sigma down, far harder than the entropy term pushes it up.
+            let mut push = Tensor::zeros((), candle_core::DType::F32, &candle_core::Device::Cpu).unwrap();
+            for l in net.layers() {
+                let (w, _) = l.training_weight().unwrap();
+                push = push.add(&w.sqr().unwrap().sum_all().unwrap()).unwrap();
+            }
+            let loss = soft.add(&(push * 1e6).unwrap()).unwrap();
+            let grads = loss.backward().unwrap();
+            opt.step(&params, &grads).unwrap();
+            for (l, s0) in net.layers().iter().zip(&start) {
+                let sigma = l.sigma().unwrap();
+                assert!(sigma.is_finite() && sigma > 0.0, "{}: sigma = {sigma} at iteration {it}, step {step}", l.name());
+                lowest = lowest.min(sigma / s0);
+            }
+        }
+    }
+    // The push really drove sigma down within an iteration (where the old raw sigma went negative).
+    // A raw sigma moving about 1e-3 per step from 0.005 would have gone negative within 10 steps.
+    assert!(lowest < 0.75, "sigma never fell well below its value at the start of an iteration ({lowest})");
 }
 
 #[test]

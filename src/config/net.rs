@@ -48,7 +48,8 @@ pub struct MaskConfig {
     pub rule: SelectionRule,
     /// Standard deviation of the initial soft-score means (Gaussian around 0).
     pub score_init_std: f64,
-    /// Initial soft-score sigma (one per layer) at the start of every task.
+    /// Initial soft-score sigma (one per layer) at the start of every task, in sigma units
+    /// (the layer trains ln sigma, so sigma stays > 0 whatever the optimiser does).
     pub sigma_init: f64,
     /// Whether the entropy term -beta_H * H on sigma is used (METHOD.md 2.3).
     pub entropy: bool,
@@ -56,12 +57,14 @@ pub struct MaskConfig {
     pub entropy_weight: f64,
     /// E: the number of iterations of each task during which the entropy term is on.
     pub entropy_iterations: usize,
-    /// Multiplicative decay of sigma per iteration after E iterations.
+    /// Multiplicative decay of sigma per iteration after E iterations (ln(decay) added to ln sigma).
     pub sigma_decay: f64,
-    /// Lower bound of sigma.
+    /// Lower bound of sigma (sigma units; applied to ln sigma as ln of it).
     pub sigma_floor: f64,
-    /// Upper bound of sigma: Adam moves the one sigma per layer by about the learning rate per
-    /// step whatever beta_H is, so without a bound the entropy term would drown the scores' ranking.
+    /// Upper bound of sigma (sigma units; applied to ln sigma as ln of it): Adam moves the one
+    /// ln sigma per layer by about the learning rate per step whatever beta_H is, so sigma grows
+    /// by a factor of about exp(lr) per step and without a bound the entropy term would drown the
+    /// scores' ranking.
     pub sigma_max: f64,
     /// Re-initialise vacant weights and redraw soft-score means at the end of each task (METHOD.md 2.4).
     pub reinit: bool,

@@ -2,7 +2,9 @@
 //! go on training (METHOD.md 2.4, 2.5).
 //!
 //! - `model.safetensors`: per layer "{layer}.weight" f32 (out, in),
-//!   "{layer}.score" f32 (out, in) (soft-score means), "{layer}.sigma" f32 (1,),
+//!   "{layer}.score" f32 (out, in) (soft-score means), "{layer}.log_sigma" f32 (1,)
+//!   (ln of the soft-score sigma, the trained variable; files written before the
+//!   layer trained ln sigma hold "{layer}.sigma" f32 (1,) instead, still read),
 //!   "{layer}.state" u32 (out, in) (0 vacant, 1 occupied, 2 + t private to t),
 //!   "{layer}.bias.{t}" f32 (out,) per finished task, "{layer}.bias.current"
 //!   while a task is in progress; extras as "extra.{name}" f32 (any shape);
@@ -120,7 +122,7 @@ pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras
             let shape = vec![l.out_dim, l.in_dim];
             model.insert(format!("{n}.weight"), f32_raw(&var_values(&l.weight)?, shape.clone()));
             model.insert(format!("{n}.score"), f32_raw(&var_values(&l.score_mean)?, shape.clone()));
-            model.insert(format!("{n}.sigma"), f32_raw(&var_values(&l.sigma)?, vec![1]));
+            model.insert(format!("{n}.log_sigma"), f32_raw(&var_values(&l.log_sigma)?, vec![1]));
             let states: Vec<u8> = l.states.iter().flat_map(|s| s.to_code().to_le_bytes()).collect();
             model.insert(format!("{n}.state"), Raw { dtype: Dtype::U32, shape: shape.clone(), bytes: states });
             for (t, b) in &l.biases {
@@ -193,6 +195,21 @@ impl<'a> Reader<'a> {
 
     fn f32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f32>> {
         Ok(self.raw(name, Dtype::F32, shape)?.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    }
+
+    /// "{layer}.log_sigma", or ln of "{layer}.sigma" in files from before sigma was trained in log space.
+    fn log_sigma(&self, layer: &str) -> anyhow::Result<Vec<f32>> {
+        let name = format!("{layer}.log_sigma");
+        if self.st.tensor(&name).is_ok() {
+            return self.f32s(&name, &[1]);
+        }
+        let legacy = format!("{layer}.sigma");
+        if self.st.tensor(&legacy).is_err() {
+            bail!("{}: missing tensor {name}", self.file);
+        }
+        let sigma = self.f32s(&legacy, &[1])?;
+        ensure!(sigma.iter().all(|s| *s > 0.0), "{}: tensor {legacy} = {sigma:?}, expected a sigma > 0", self.file);
+        Ok(sigma.iter().map(|s| s.ln()).collect())
     }
 
     fn u32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u32>> {
@@ -286,7 +303,7 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 init_bound: le.init_bound,
                 weight: var(model.f32s(&format!("{n}.weight"), &shape)?, &shape)?,
                 score_mean: var(model.f32s(&format!("{n}.score"), &shape)?, &shape)?,
-                sigma: var(model.f32s(&format!("{n}.sigma"), &[1])?, &[1])?,
+                log_sigma: var(model.log_sigma(n)?, &[1])?,
                 states,
                 masks,
                 biases,

@@ -6,14 +6,19 @@
 //! score means mu (out, in), one sigma per layer, a hard mask M drawn once
 //! per iteration from S = mu + sigma * eps, and the bias b_n (out,).
 //!
+//! sigma is trained through its logarithm: the variable is log_sigma and
+//! sigma = exp(log_sigma) wherever it is used, so no optimiser step can make
+//! it zero or negative (a raw sigma Var went negative within one PPO update,
+//! which made ln sigma NaN and flipped the sign of the sampled scores).
+//!
 //! Forward for task t: y = x (W * M_t)^T + b_t, x (batch, in) -> (batch, out).
 //!
 //! Gradients (2.2): the training forward uses M_ste = M + (S - stop_grad(S)),
 //! whose value is exactly M, so dL/dW = dL/dWeff * M and
 //! dL/dmu = dL/dM = dL/dWeff * W for every element (straight-through);
-//! dL/dsigma = sum(dL/dM * eps). Which elements may actually move is the
+//! dL/dlog_sigma = sigma * sum(dL/dM * eps). Which elements may actually move is the
 //! optimiser's update mask: W where selected AND vacant, mu where selectable,
-//! sigma only during the first E iterations (after that it decays, 2.3).
+//! log_sigma only during the first E iterations (after that it decays, 2.3).
 
 use super::bitmask::BitMask;
 use super::select::{select_mask, SelectionParams};
@@ -53,7 +58,8 @@ pub struct MaskedLinear {
     pub(crate) init_bound: f32,
     pub(crate) weight: Var,
     pub(crate) score_mean: Var,
-    pub(crate) sigma: Var,
+    /// ln sigma, shape (1,); sigma = exp(log_sigma) is always > 0.
+    pub(crate) log_sigma: Var,
     pub(crate) states: Vec<ElementState>,
     pub(crate) masks: BTreeMap<TaskId, BitMask>,
     pub(crate) biases: BTreeMap<TaskId, Vec<f32>>,
@@ -101,7 +107,7 @@ impl MaskedLinear {
             init_bound,
             weight: var_from(w, &[out_dim, in_dim])?,
             score_mean: var_from(mu, &[out_dim, in_dim])?,
-            sigma: var_from(vec![cfg.sigma_init as f32], &[1])?,
+            log_sigma: var_from(vec![(cfg.sigma_init as f32).ln()], &[1])?,
             states: vec![ElementState::Vacant; n],
             masks: BTreeMap::new(),
             biases: BTreeMap::new(),
@@ -134,9 +140,14 @@ impl MaskedLinear {
         var_values(&self.weight)
     }
 
-    /// The current soft-score sigma of the layer.
+    /// The current soft-score sigma of the layer (exp of the trained log_sigma).
     pub fn sigma(&self) -> anyhow::Result<f32> {
-        Ok(var_values(&self.sigma)?[0])
+        Ok(self.log_sigma()?.exp())
+    }
+
+    /// The current ln sigma of the layer (the trained variable).
+    pub fn log_sigma(&self) -> anyhow::Result<f32> {
+        Ok(var_values(&self.log_sigma)?[0])
     }
 
     /// The hard mask (out, in) of the current training iteration, if one was drawn.
@@ -163,7 +174,7 @@ impl MaskedLinear {
             None => var_from(vec![0.0; self.out_dim], &[self.out_dim])?,
         };
         if !fine_tune {
-            set_var(&self.sigma, vec![self.cfg.sigma_init as f32])?;
+            set_var(&self.log_sigma, vec![(self.cfg.sigma_init as f32).ln()])?;
             let mut mu = var_values(&self.score_mean)?;
             let delta = (self.cfg.transfer_bonus * self.cfg.score_init_std) as f32;
             let mut bonus = vec![false; mu.len()];
@@ -180,6 +191,7 @@ impl MaskedLinear {
 
     /// Once per training iteration: draw S = mu + sigma * eps, choose the hard mask, set the update masks.
     /// After E iterations sigma decays (x decay, floor); it is always kept in [floor, max].
+    /// Both are done on log_sigma: + ln(decay), clamped to [ln floor, ln max].
     pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
         let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);
         let params = self.params();
@@ -194,12 +206,13 @@ impl MaskedLinear {
             t.noise = None;
             return Ok(());
         }
-        let mut sigma = var_values(&self.sigma)?[0];
+        let mut log_sigma = var_values(&self.log_sigma)?[0];
         if iteration >= self.cfg.entropy_iterations {
-            sigma *= self.cfg.sigma_decay as f32;
+            log_sigma += (self.cfg.sigma_decay as f32).ln();
         }
-        sigma = sigma.clamp(self.cfg.sigma_floor as f32, self.cfg.sigma_max as f32);
-        set_var(&self.sigma, vec![sigma])?;
+        log_sigma = log_sigma.clamp((self.cfg.sigma_floor as f32).ln(), (self.cfg.sigma_max as f32).ln());
+        set_var(&self.log_sigma, vec![log_sigma])?;
+        let sigma = log_sigma.exp();
         let mu = var_values(&self.score_mean)?;
         let eps: Vec<f32> = (0..n).map(|_| StandardNormal.sample(rng)).collect();
         let sample: Vec<f32> = mu.iter().zip(&eps).map(|(m, e)| m + sigma * e).collect();
@@ -225,7 +238,7 @@ impl MaskedLinear {
         let weight = self.weight.as_tensor();
         let effective = match &t.noise {
             Some(eps) => {
-                let sample = self.score_mean.as_tensor().add(&eps.broadcast_mul(self.sigma.as_tensor())?)?;
+                let sample = self.score_mean.as_tensor().add(&eps.broadcast_mul(&self.log_sigma.as_tensor().exp()?)?)?;
                 let straight_through = mask.add(&sample.sub(&sample.detach())?)?;
                 weight.mul(&straight_through)?
             }
@@ -256,19 +269,22 @@ impl MaskedLinear {
         Ok(x.matmul(&eff.t()?)?.broadcast_add(&bias)?)
     }
 
-    /// -beta_H * H with H = sum over the layer's scores of 0.5 ln(2 pi e sigma^2) (2.3); 0 when off or after E iterations.
+    /// -beta_H * H with H = sum over the layer's scores of 0.5 ln(2 pi e sigma^2)
+    /// = n * (log_sigma + 0.5 ln(2 pi e)) (2.3); 0 when off or after E iterations.
+    /// Finite for every finite log_sigma; its gradient on log_sigma is the constant -beta_H * n.
     pub fn soft_score_loss(&self) -> anyhow::Result<Tensor> {
         match &self.training {
             Some(t) if !t.fine_tune && self.cfg.entropy && t.iteration < self.cfg.entropy_iterations => {
                 let n = (self.out_dim * self.in_dim) as f64;
-                let h = ((self.sigma.as_tensor().log()? * n)? + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
+                let h = ((self.log_sigma.as_tensor() * n)? + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
                 Ok((h * -self.cfg.entropy_weight)?.sum_all()?)
             }
             _ => Ok(Tensor::zeros((), DType::F32, &Device::Cpu)?),
         }
     }
 
-    /// Trainable variables with their update masks: weight, score, sigma, bias (fine-tune: weight and bias only).
+    /// Trainable variables with their update masks: weight, score, log_sigma (named "{layer}.log_sigma"),
+    /// bias (fine-tune: weight and bias only).
     pub fn parameters(&self) -> Vec<Param> {
         let Some(t) = &self.training else { return Vec::new() };
         let p = |suffix: &str, var: &Var, m: Option<&Tensor>| Param { name: format!("{}.{suffix}", self.name), var: var.clone(), update_mask: m.cloned() };
@@ -276,7 +292,7 @@ impl MaskedLinear {
         if !t.fine_tune {
             out.push(p("score", &self.score_mean, t.score_update.as_ref()));
             if t.iteration < self.cfg.entropy_iterations {
-                out.push(p("sigma", &self.sigma, None));
+                out.push(p("log_sigma", &self.log_sigma, None));
             }
         }
         out.push(p("bias", &t.bias, None));
