@@ -334,17 +334,14 @@ impl RobotSim {
         vel[1] += dv[1];
     }
 
-    /// Whether a part of this kind touches the ground: returns (trunk, per-leg thigh/calf count, per-leg foot).
+    /// Whether a part of this kind touches the ground (see [`touches`]): returns (trunk, per-leg thigh/calf count, per-leg foot).
     pub fn contacts(&self) -> (bool, [u32; NUM_LEGS], [bool; NUM_LEGS]) {
         let mut trunk = false;
         let mut limb = [0u32; NUM_LEGS];
         let mut feet = [false; NUM_LEGS];
+        let dt = self.world.integration_parameters.dt;
         for &(c, part) in &self.parts {
-            let touching = self
-                .world
-                .narrow_phase
-                .contact_pair(c, self.ground)
-                .is_some_and(|p| p.has_any_active_contact());
+            let touching = self.world.narrow_phase.contact_pair(c, self.ground).is_some_and(|p| touches(p, dt));
             if !touching {
                 continue;
             }
@@ -357,4 +354,21 @@ impl RobotSim {
         }
         (trunk, limb, feet)
     }
+}
+
+/// Smallest normal contact force that counts as touching, N (legged_gym's 0.1 N).
+pub const CONTACT_FORCE_THRESHOLD: f32 = 0.1;
+
+/// Whether a contact pair is a real contact after a physics step of `dt`: the
+/// solver pushed with more than [`CONTACT_FORCE_THRESHOLD`], or a contact point
+/// penetrates (distance <= 0). rapier's `has_any_active_contact` is not this:
+/// it is true for any solver contact, and solver contacts include speculative
+/// ones up to the prediction distance away (a rear calf capsule's lower end
+/// hovering ~2 cm above the ground, with zero impulse, counted as touching).
+pub fn touches(pair: &ContactPair, dt: f32) -> bool {
+    pair.total_impulse_magnitude() > CONTACT_FORCE_THRESHOLD * dt
+        || pair
+            .solver_manifolds()
+            .iter()
+            .any(|m| m.data.solver_contacts.iter().any(|s| s.dist <= 0.0))
 }
