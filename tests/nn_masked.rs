@@ -226,3 +226,20 @@ fn misuse_of_the_task_life_cycle_is_an_error_not_a_panic() {
     let err = MaskedMlp::new("x", &[2, 2], quadcl::nn::Activation::Elu, &bad, 0).unwrap_err().to_string();
     assert!(err.contains("capacity"), "{err}");
 }
+
+#[test]
+fn scaling_the_output_init_scales_its_weights_and_only_before_the_first_task() {
+    let cfg = MaskConfig::default();
+    let plain = MaskedMlp::new("net", &[6, 8, 3], quadcl::nn::Activation::Elu, &cfg, 4).unwrap();
+    let mut scaled = MaskedMlp::new("net", &[6, 8, 3], quadcl::nn::Activation::Elu, &cfg, 4).unwrap();
+    scaled.scale_output_init(0.01).unwrap();
+    let w = |net: &MaskedMlp, l: usize| net.layers()[l].weight_values().unwrap();
+    assert_eq!(w(&plain, 0), w(&scaled, 0), "hidden layers are untouched");
+    for (a, b) in w(&plain, 1).iter().zip(w(&scaled, 1)) {
+        assert_eq!(a * 0.01, b);
+    }
+    assert!(scaled.scale_output_init(0.0).is_err());
+    scaled.begin_task(0, &[]).unwrap();
+    let err = scaled.scale_output_init(0.5).unwrap_err().to_string();
+    assert!(err.contains("before the first task"), "{err}");
+}

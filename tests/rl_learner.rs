@@ -81,3 +81,24 @@ fn same_seed_gives_the_same_training_curve() {
     let c = strip(run(&cfg, 3, 8));
     assert_ne!(a, c, "a different seed should give a different curve");
 }
+
+/// Largest |action mean| of a fresh agent (task 0 begun) on the standing robot's observations.
+fn fresh_action_means_max(ppo: quadcl::config::PpoConfig) -> f32 {
+    use quadcl::rl::sim_env::SimTrainEnv;
+    use rand::SeedableRng;
+    let cfg = quadcl::config::Config { ppo, ..quadcl::config::Config::default() };
+    let env = SimTrainEnv::new(&cfg.env, &quadcl::sim::Perturbation::none(), 8, 1).unwrap();
+    let mut agent = quadcl::rl::Agent::new(env.dims(), &cfg, 1).unwrap();
+    agent.begin_task(0, &[]).unwrap();
+    agent.begin_iteration(0, &mut rand_chacha::ChaCha8Rng::seed_from_u64(1)).unwrap();
+    let means = agent.act_deterministic(env.observations(), env.obs_histories()).unwrap();
+    means.iter().fold(0f32, |m, a| m.max(a.abs()))
+}
+
+#[test]
+fn a_fresh_actor_starts_near_the_default_pose_not_at_a_random_offset() {
+    let scaled = fresh_action_means_max(quadcl::config::PpoConfig::default());
+    assert!(scaled < 0.1, "initial action means up to {scaled}: the policy would start folded over");
+    let plain = fresh_action_means_max(quadcl::config::PpoConfig { actor_output_init_scale: 1.0, ..Default::default() });
+    assert!(plain > 0.5, "without the scale the means reach {plain}; the test no longer shows what the scale is for");
+}

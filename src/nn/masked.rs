@@ -140,6 +140,21 @@ impl MaskedLinear {
         var_values(&self.weight)
     }
 
+    /// Scales the initial weights and the re-initialisation range by
+    /// `factor`, e.g. for a policy head that starts near zero (CleanRL's
+    /// actor-mean init). Only on a fresh layer: no task started or ended.
+    pub fn scale_init(&mut self, factor: f32) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            self.masks.is_empty() && self.training.is_none(),
+            "{}: the initial weights can only be scaled before the first task starts",
+            self.name
+        );
+        anyhow::ensure!(factor.is_finite() && factor > 0.0, "{}: init scale must be finite and > 0, got {factor}", self.name);
+        set_var(&self.weight, var_values(&self.weight)?.into_iter().map(|w| w * factor).collect())?;
+        self.init_bound *= factor;
+        Ok(())
+    }
+
     /// The current soft-score sigma of the layer (exp of the trained log_sigma).
     pub fn sigma(&self) -> anyhow::Result<f32> {
         Ok(self.log_sigma()?.exp())

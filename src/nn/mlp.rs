@@ -75,6 +75,13 @@ impl MaskedMlp {
         Ok(())
     }
 
+    /// Scales the output layer's initial weights and re-initialisation range
+    /// (see [`MaskedLinear::scale_init`]); only before the first task.
+    pub fn scale_output_init(&mut self, factor: f32) -> anyhow::Result<()> {
+        let name = self.name.clone();
+        self.layers.last_mut().ok_or_else(|| anyhow::anyhow!("{name}: no layers"))?.scale_init(factor)
+    }
+
     /// The layers, input first.
     pub fn layers(&self) -> &[MaskedLinear] {
         &self.layers
