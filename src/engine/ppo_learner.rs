@@ -265,7 +265,7 @@ impl Learner for PpoTaskLearner {
         if let Some(t) = self.last_task {
             extras.insert(LAST_TASK_KEY.into(), Tensor::new(&[t as f32], &Device::Cpu)?);
         }
-        let info = PolicyInfo { config: self.config.clone(), dims: agent.dims.into(), iterations: self.iterations_done };
+        let info = PolicyInfo { config: self.config.clone(), dims: agent.dims, iterations: self.iterations_done };
         checkpoint::save_policy(dir, tasks, &agent.networks(), &extras, &serde_json::to_value(info)?)
     }
 
@@ -292,7 +292,7 @@ impl Learner for PpoTaskLearner {
             Some(v) => Some(v.flatten_all()?.to_vec1::<f32>()?.first().copied().unwrap_or(0.0) as TaskId),
             None => states.keys().next_back().copied(),
         };
-        let mut agent = Agent::new(info.dims.into(), &self.config, self.config.seed)?;
+        let mut agent = Agent::new(info.dims, &self.config, self.config.seed)?;
         anyhow::ensure!(agent.dims == self.agent_ref().dims, "{}: the policy was built for other observation/action widths", dir.display());
         let mut networks = policy.networks;
         let mut take = |name: &str| -> anyhow::Result<MaskedMlp> {

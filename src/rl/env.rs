@@ -6,8 +6,8 @@
 //! Shapes (N = `num_envs`): observations (N, obs), privileged (N, priv),
 //! histories (N, history_len * obs, oldest first), actions (N, act).
 
-/// Widths of an environment's vectors.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Widths of an environment's vectors (also stored in a policy's manifest).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EnvDims {
     /// Actor observation width.
     pub obs: usize,

@@ -24,45 +24,9 @@ pub struct PolicyInfo {
     /// The whole configuration of the run.
     pub config: Config,
     /// Environment widths the networks were built for.
-    pub dims: ManifestDims,
+    pub dims: EnvDims,
     /// Training iterations completed.
     pub iterations: usize,
-}
-
-/// Serialisable copy of [`EnvDims`].
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
-pub struct ManifestDims {
-    pub obs: usize,
-    pub privileged_obs: usize,
-    pub history_len: usize,
-    pub act: usize,
-    pub base_velocity_offset: usize,
-    pub control_dt: f64,
-}
-
-impl From<EnvDims> for ManifestDims {
-    fn from(d: EnvDims) -> Self {
-        Self {
-            obs: d.obs,
-            privileged_obs: d.privileged_obs,
-            history_len: d.history_len,
-            act: d.act,
-            base_velocity_offset: d.base_velocity_offset,
-            control_dt: d.control_dt,
-        }
-    }
-}
-impl From<ManifestDims> for EnvDims {
-    fn from(d: ManifestDims) -> Self {
-        Self {
-            obs: d.obs,
-            privileged_obs: d.privileged_obs,
-            history_len: d.history_len,
-            act: d.act,
-            base_velocity_offset: d.base_velocity_offset,
-            control_dt: d.control_dt,
-        }
-    }
 }
 
 /// A loaded policy: the agent in recall mode on its task, the task names and the info.
@@ -117,7 +81,7 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
         let i = networks.iter().position(|n| n.name() == name).with_context(|| format!("{}: no network {name}", dir.display()))?;
         Ok(networks.swap_remove(i))
     };
-    let mut agent = Agent::new(info.dims.into(), &info.config, info.config.seed)?;
+    let mut agent = Agent::new(info.dims, &info.config, info.config.seed)?;
     agent.actor = take("actor")?;
     agent.critic = take("critic")?;
     agent.encoder = take("cenet_encoder")?;

@@ -190,7 +190,7 @@ pub fn train_from(
         last: Metrics::new(),
     };
     let dims = env.dims();
-    let info_at = |iterations: usize| PolicyInfo { config: config.clone(), dims: dims.into(), iterations };
+    let info_at = |iterations: usize| PolicyInfo { config: config.clone(), dims, iterations };
     for it in first..cfg.iterations {
         let mut m = learner.train_iteration(env)?;
         summary.env_steps += cfg.steps_per_env * env.num_envs();
