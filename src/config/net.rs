@@ -46,7 +46,10 @@ pub struct MaskConfig {
     pub private_share: f64,
     /// Selection rule: "split" (the method), "free", "vacant" or "per-layer".
     pub rule: SelectionRule,
-    /// Standard deviation of the initial soft-score means (Gaussian around 0).
+    /// Standard deviation of the initial soft-score means (Gaussian around 0). It sets how fast
+    /// the hard mask changes: Adam moves every mean by about the learning rate per step, so at
+    /// 0.01 a PPO run redraws 37 % of its selected weights every iteration
+    /// (`charts/mask_churn_actor`), at 0.3 about 2-3 %.
     pub score_init_std: f64,
     /// Initial soft-score sigma (one per layer) at the start of every task, in sigma units
     /// (the layer trains ln sigma, so sigma stays > 0 whatever the optimiser does).
@@ -79,7 +82,7 @@ impl Default for MaskConfig {
             vacant_share: 0.25,
             private_share: 0.02,
             rule: SelectionRule::Split,
-            score_init_std: 0.01,
+            score_init_std: 0.3,
             sigma_init: 0.005,
             entropy: true,
             entropy_weight: 1e-4,

@@ -292,6 +292,8 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                     noise: None,
                     weight_update: None,
                     score_update: None,
+                    previous_selection: None,
+                    mask_churn: None,
                 }),
                 None => None,
             };

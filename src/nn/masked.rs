@@ -45,6 +45,10 @@ pub(crate) struct Training {
     pub noise: Option<Tensor>,
     pub weight_update: Option<Tensor>,
     pub score_update: Option<Tensor>,
+    /// The previous iteration's hard mask, to measure how much of it this iteration replaced.
+    pub previous_selection: Option<Vec<bool>>,
+    /// Fraction of this iteration's selected elements that the previous iteration had not selected.
+    pub mask_churn: Option<f64>,
 }
 
 /// A linear layer with per-task binary masks over shared base weights.
@@ -80,6 +84,17 @@ fn set_var(var: &Var, values: Vec<f32>) -> anyhow::Result<()> {
 
 pub(crate) fn var_values(var: &Var) -> anyhow::Result<Vec<f32>> {
     Ok(var.as_tensor().flatten_all()?.to_vec1::<f32>()?)
+}
+
+/// Fraction of the elements selected in `now` that were not selected in `before` (0 when none is selected).
+fn churn(before: &[bool], now: &[bool]) -> f64 {
+    let selected = now.iter().filter(|s| **s).count();
+    let entered = now.iter().zip(before).filter(|(n, b)| **n && !**b).count();
+    if selected == 0 {
+        0.0
+    } else {
+        entered as f64 / selected as f64
+    }
 }
 
 fn mask_tensor(bits: impl Iterator<Item = bool>, out_dim: usize, in_dim: usize) -> anyhow::Result<Tensor> {
@@ -200,7 +215,7 @@ impl MaskedLinear {
             mu.iter_mut().zip(&bonus).filter(|(_, b)| **b).for_each(|(m, _)| *m += delta);
             set_var(&self.score_mean, mu)?;
         }
-        self.training = Some(Training { task, fine_tune, iteration: 0, bias, mask: None, noise: None, weight_update: None, score_update: None });
+        self.training = Some(Training { task, fine_tune, iteration: 0, bias, mask: None, noise: None, weight_update: None, score_update: None, previous_selection: None, mask_churn: None });
         Ok(())
     }
 
@@ -232,12 +247,20 @@ impl MaskedLinear {
         let eps: Vec<f32> = (0..n).map(|_| StandardNormal.sample(rng)).collect();
         let sample: Vec<f32> = mu.iter().zip(&eps).map(|(m, e)| m + sigma * e).collect();
         let selected = select_mask(&sample, &self.states, out_dim, in_dim, t.task, &params);
+        t.mask_churn = t.previous_selection.as_ref().map(|previous| churn(previous, &selected));
+        t.previous_selection = Some(selected.clone());
         t.mask = Some(mask_tensor(selected.iter().copied(), out_dim, in_dim)?);
         t.noise = Some(Tensor::from_vec(eps, (out_dim, in_dim), &Device::Cpu)?);
         let vacant = self.states.iter().map(|s| *s == ElementState::Vacant);
         t.weight_update = Some(mask_tensor(selected.iter().zip(vacant).map(|(s, v)| *s && v), out_dim, in_dim)?);
         t.score_update = Some(mask_tensor(self.states.iter().map(|s| s.selectable_by(t.task)), out_dim, in_dim)?);
         Ok(())
+    }
+
+    /// The share of this iteration's hard mask that the previous iteration had not selected
+    /// (None before a task's second iteration, and while fine-tuning, whose mask is fixed).
+    pub fn mask_churn(&self) -> Option<f64> {
+        self.training.as_ref().and_then(|t| t.mask_churn)
     }
 
     fn training_ready(&self) -> anyhow::Result<&Training> {

@@ -115,6 +115,20 @@ impl MaskedMlp {
         self.layers.iter_mut().try_for_each(|l| l.begin_iteration(iteration, rng))
     }
 
+    /// Mask churn of the whole network: the share of this iteration's selected elements that
+    /// the previous iteration had not selected, layers weighted by their size (None until a
+    /// task's second iteration). Large values mean the sampled network changes under the
+    /// policy between iterations, which PPO's KL does not see.
+    pub fn mask_churn(&self) -> Option<f64> {
+        let (mut sum, mut weight) = (0.0, 0.0);
+        for l in &self.layers {
+            let n = (l.out_dim * l.in_dim) as f64;
+            sum += l.mask_churn()? * n;
+            weight += n;
+        }
+        (weight > 0.0).then(|| sum / weight)
+    }
+
     /// Concatenates every layer's (weight, bias) into the fused op's theta and runs it.
     fn run(&self, x: &Tensor, weights: Vec<(Tensor, Tensor)>, track: bool) -> anyhow::Result<Tensor> {
         let dims = x.dims();

@@ -82,6 +82,12 @@ impl PpoLearner {
         let start = Instant::now();
         self.agent.begin_iteration(self.iteration, &mut self.rng)?;
         let mut metrics = self.collect_rollout(env)?;
+        if let Some(churn) = self.agent.actor.mask_churn() {
+            metrics.insert("charts/mask_churn_actor".into(), churn);
+        }
+        if let Some(churn) = self.agent.critic.mask_churn() {
+            metrics.insert("charts/mask_churn_critic".into(), churn);
+        }
         let rollout_s = start.elapsed().as_secs_f64();
         let update_start = Instant::now();
         metrics.extend(self.update()?);
