@@ -61,3 +61,24 @@ fn eval_of_a_missing_policy_names_the_directory() {
     let err = String::from_utf8_lossy(&output.stderr);
     assert!(err.contains("/nonexistent/policy"), "{err}");
 }
+
+#[test]
+fn eval_of_a_training_checkpoint_equals_the_policy_its_task_ends_with() {
+    // The last checkpoint is written before the task ends; evaluated, it ends the
+    // task in memory (masks = top-k of the score means) and must score exactly as
+    // the policy that training wrote after ending the task.
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("tiny.toml");
+    std::fs::write(&config, TINY).unwrap();
+    let out = dir.path().join("run");
+    let status = quadcl().args(["train", "--config"]).arg(&config).arg("--out").arg(&out).status().unwrap();
+    assert!(status.success());
+    let eval = |policy: std::path::PathBuf| {
+        let output = quadcl().args(["eval", "--policy"]).arg(policy).args(["--episodes", "3", "--seed", "2", "--json"]).output().unwrap();
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        serde_json::from_slice::<serde_json::Value>(&output.stdout).unwrap()
+    };
+    let (from_checkpoint, from_policy) = (eval(out.join("checkpoint")), eval(out.join("policy")));
+    assert_eq!(from_checkpoint, from_policy);
+    assert!(from_policy["mean_return"].as_f64().unwrap().is_finite());
+}
