@@ -82,3 +82,34 @@ fn eval_of_a_training_checkpoint_equals_the_policy_its_task_ends_with() {
     assert_eq!(from_checkpoint, from_policy);
     assert!(from_policy["mean_return"].as_f64().unwrap().is_finite());
 }
+
+#[test]
+fn gait_reports_the_contact_pattern_of_a_held_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("tiny.toml");
+    std::fs::write(&config, TINY).unwrap();
+    let out = dir.path().join("run");
+    assert!(quadcl().args(["train", "--config"]).arg(&config).arg("--out").arg(&out).status().unwrap().success());
+    let output = quadcl()
+        .args(["gait", "--policy"])
+        .arg(out.join("policy"))
+        .args(["--vx", "-0.3", "--wz", "0.5", "--seconds", "3", "--json"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["command"], serde_json::json!([-0.3, 0.0, 0.5]));
+    let fell = report["fell"].as_bool().unwrap();
+    let seconds = report["seconds"].as_f64().unwrap();
+    // An untrained policy may fall; a recording stops there.
+    assert!(if fell { seconds < 3.0 } else { (seconds - 3.0).abs() < 1e-4 }, "{report}");
+    let duty: Vec<f64> = report["duty_factor"].as_array().unwrap().iter().map(|d| d.as_f64().unwrap()).collect();
+    assert_eq!(duty.len(), 4);
+    assert!(duty.iter().all(|d| (0.0..=1.0).contains(d)), "{report}");
+    assert!(["trot", "pace", "bound", "stand", "irregular"].contains(&report["gait"].as_str().unwrap()));
+    let strip = report["contact_strip"].as_array().unwrap();
+    assert_eq!(strip.len(), 4);
+    for (line, foot) in strip.iter().zip(["FL", "FR", "RL", "RR"]) {
+        assert!(line.as_str().unwrap().starts_with(foot), "{line}");
+    }
+}

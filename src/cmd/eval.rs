@@ -28,37 +28,15 @@ pub struct EvalArgs {
     pub json: bool,
 }
 
-/// A policy directory, or a training checkpoint (`DIR/checkpoint` of `quadcl train`)
-/// whose task is still in progress.
-struct Loaded {
-    policy: crate::rl::policy_dir::LoadedPolicy,
-    in_progress: bool,
-}
-
-/// Loads a policy; a checkpoint of a task in progress is evaluated as if its task ended
-/// now (METHOD 2.4: the masks are the top-k of the current score means, no noise).
-fn load(dir: &std::path::Path) -> anyhow::Result<Loaded> {
-    let manifest = crate::nn::checkpoint::load_policy(dir)?;
-    if manifest.networks.iter().all(|n| n.current_task().is_none()) {
-        return Ok(Loaded { policy: crate::rl::policy_dir::load_policy(dir, None)?, in_progress: false });
-    }
-    let mut policy = crate::rl::policy_dir::load_training_checkpoint(dir)?;
-    tracing::info!("{}: task {:?} is still training; evaluating the masks its score means give now", dir.display(), policy.tasks[policy.agent.task]);
-    // end_task draws fresh vacant weights for the next task: they play no part in this task.
-    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
-    policy.agent.end_task(&mut rng)?;
-    Ok(Loaded { policy, in_progress: true })
-}
-
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.episodes > 0, "--episodes must be > 0");
     let task: Perturbation = args.task.parse()?;
     // A policy trained on several tasks recalls the one asked for; a single-task
     // policy (the base policy) is evaluated on any perturbation.
     let name = task.to_string();
-    let loaded = load(&args.policy)?;
+    let loaded = crate::rl::policy_dir::load_policy_or_checkpoint(&args.policy)?;
     let loaded = if loaded.policy.tasks.len() > 1 && loaded.policy.tasks.contains(&name) && !loaded.in_progress {
-        Loaded { policy: crate::rl::policy_dir::load_policy(&args.policy, Some(&name))?, in_progress: false }
+        crate::rl::policy_dir::PolicyOrCheckpoint { policy: crate::rl::policy_dir::load_policy(&args.policy, Some(&name))?, in_progress: false }
     } else {
         loaded
     };

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod eval;
 pub mod finetune;
+pub mod gait;
 pub mod masks;
 pub mod run;
 pub mod train;

@@ -20,6 +20,7 @@ pub mod agent;
 pub mod cenet_loss;
 pub mod env;
 pub mod evaluate;
+pub mod gait;
 pub mod losses;
 pub mod normalizer;
 pub mod policy_dir;

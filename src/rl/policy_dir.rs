@@ -121,3 +121,27 @@ pub fn load_training_checkpoint(dir: &Path) -> anyhow::Result<LoadedPolicy> {
     loaded.agent.privileged_normalizer.unfreeze();
     Ok(loaded)
 }
+
+/// A policy, or a training checkpoint whose task was ended in memory.
+#[derive(Debug)]
+pub struct PolicyOrCheckpoint {
+    pub policy: LoadedPolicy,
+    /// Whether `dir` was a checkpoint of a task still training.
+    pub in_progress: bool,
+}
+
+/// Loads a policy directory (its last task), or a training checkpoint (`RUN/checkpoint` of
+/// `quadcl train`) as if its task ended now: METHOD 2.4's masks, the top-k of the current
+/// score means without noise. How a long run is evaluated while it trains.
+pub fn load_policy_or_checkpoint(dir: &Path) -> anyhow::Result<PolicyOrCheckpoint> {
+    let saved = checkpoint::load_policy(dir)?;
+    if saved.networks.iter().all(|n| n.current_task().is_none()) {
+        return Ok(PolicyOrCheckpoint { policy: load_policy(dir, None)?, in_progress: false });
+    }
+    let mut policy = load_training_checkpoint(dir)?;
+    tracing::info!("{}: task {:?} is still training; using the masks its score means give now", dir.display(), policy.tasks[policy.agent.task]);
+    // end_task also redraws the vacant weights for a next task: they play no part in this one.
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
+    policy.agent.end_task(&mut rng)?;
+    Ok(PolicyOrCheckpoint { policy, in_progress: true })
+}

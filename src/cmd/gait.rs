@@ -1,0 +1,70 @@
+//! `quadcl gait --policy DIR [--task TASK] [--vx 0.5] [--wz 0] [--seconds 10] [--json]`:
+//! runs the deterministic policy with one command held (no pushes, nominal
+//! physics) and prints its contact pattern: duty factors, touchdowns per
+//! second, which feet move together and the gait they name (`rl::gait`).
+
+use crate::rl::gait::{record, GaitReport};
+use crate::rl::sim_env::load_robot;
+use crate::sim::Perturbation;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct GaitArgs {
+    /// Policy directory (or a training run's `checkpoint/`).
+    #[arg(long)]
+    pub policy: PathBuf,
+    /// Task to run on: `none`, `crash:FL`, ...
+    #[arg(long, default_value = "none")]
+    pub task: String,
+    /// Forward velocity command, m/s.
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
+    pub vx: f32,
+    /// Yaw rate command, rad/s.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub wz: f32,
+    /// Seconds recorded, after 2 s to settle into the gait.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f32,
+    /// Seed of the environment's reset.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: GaitArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(args.seconds > 0.0 && args.seconds.is_finite(), "--seconds must be > 0, got {}", args.seconds);
+    let task: Perturbation = args.task.parse()?;
+    let loaded = crate::rl::policy_dir::load_policy_or_checkpoint(&args.policy)?;
+    let name = task.to_string();
+    let loaded = if loaded.policy.tasks.len() > 1 && loaded.policy.tasks.contains(&name) && !loaded.in_progress {
+        crate::rl::policy_dir::load_policy(&args.policy, Some(&name))?
+    } else {
+        loaded.policy
+    };
+    let env_cfg = &loaded.info.config.env;
+    let robot = load_robot(env_cfg)?;
+    let report = record(&loaded.agent, env_cfg, &robot, &task, [args.vx, 0.0, args.wz], 2.0, args.seconds, args.seed)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print_table(&report);
+    }
+    Ok(())
+}
+
+fn print_table(r: &GaitReport) {
+    let feet = |v: &[f32; 4], unit: &str| format!("FL {:.2}  FR {:.2}  RL {:.2}  RR {:.2}{unit}", v[0], v[1], v[2], v[3]);
+    println!("command        vx {:.2} m/s, wz {:.2} rad/s", r.command[0], r.command[2]);
+    println!("achieved       vx {:.2} m/s, wz {:.2} rad/s over {:.1} s{}", r.mean_vx, r.mean_wz, r.seconds, if r.fell { " (fell)" } else { "" });
+    println!("duty factor    {}", feet(&r.duty_factor, ""));
+    println!("touchdowns     {}", feet(&r.touchdowns_per_s, " per s"));
+    println!("same state     diagonal {:.2}, lateral {:.2}, fore-aft {:.2}", r.diagonal_agreement, r.lateral_agreement, r.fore_aft_agreement);
+    println!("gait           {}", r.gait);
+    println!("last 2 s       (# on the ground, . in the air; one character per 20 ms)");
+    for line in &r.contact_strip {
+        println!("  {line}");
+    }
+}
