@@ -288,3 +288,28 @@ fn mask_churn_counts_the_selected_share_that_the_previous_draw_did_not_select() 
     let (lo, hi) = per_layer.iter().fold((f64::MAX, f64::MIN), |(a, b), &c| (a.min(c), b.max(c)));
     assert!((lo..=hi).contains(&churn), "network churn {churn} outside its layers' {per_layer:?}");
 }
+
+#[test]
+fn a_new_task_starts_from_the_mean_bias_of_its_related_tasks() {
+    let (mut net, _) = net_after(2, &MaskConfig::default());
+    let start_bias = |net: &mut MaskedMlp, related: &[usize]| -> Vec<Vec<f32>> {
+        net.begin_task(2, related).unwrap();
+        let b = net.layers().iter().map(|l| l.training_bias().unwrap().unwrap()).collect();
+        // Back to between tasks without ending task 2.
+        *net = net_after(2, &MaskConfig::default()).0;
+        b
+    };
+    for (layer, bias) in start_bias(&mut net, &[]).iter().enumerate() {
+        assert!(bias.iter().all(|b| *b == 0.0), "layer {layer}: a task with no related task starts from zero bias");
+    }
+    let both = start_bias(&mut net, &[0, 1]);
+    let only_first = start_bias(&mut net, &[0]);
+    for (k, l) in net.layers().iter().enumerate() {
+        let (b0, b1) = (l.task_bias(0).unwrap(), l.task_bias(1).unwrap());
+        assert!(b0.iter().zip(b1).any(|(a, b)| a != b), "{}: tasks 0 and 1 ended with the same bias", l.name());
+        assert_eq!(only_first[k], b0, "{}", l.name());
+        for i in 0..b0.len() {
+            assert!((both[k][i] - (b0[i] + b1[i]) / 2.0).abs() <= 1e-6, "{} element {i}", l.name());
+        }
+    }
+}

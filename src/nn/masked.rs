@@ -185,6 +185,16 @@ impl MaskedLinear {
         self.training.as_ref().and_then(|t| t.mask.as_ref())
     }
 
+    /// The stored bias (out,) of a finished task.
+    pub fn task_bias(&self, task: TaskId) -> Option<&[f32]> {
+        self.biases.get(&task).map(Vec::as_slice)
+    }
+
+    /// The bias (out,) of the task being trained, if any.
+    pub fn training_bias(&self) -> anyhow::Result<Option<Vec<f32>>> {
+        self.training.as_ref().map(|t| var_values(&t.bias)).transpose()
+    }
+
     /// The stored mask of a finished task.
     pub fn task_mask(&self, task: TaskId) -> Option<&BitMask> {
         self.masks.get(&task)
@@ -194,15 +204,28 @@ impl MaskedLinear {
         SelectionParams { capacity: self.cfg.capacity, vacant_share: self.cfg.vacant_share, rule: self.cfg.rule }
     }
 
-    /// Starts training `task`: fine-tune mode if it already finished, otherwise a fresh bias,
+    /// A new task's starting bias: the mean of its related tasks' biases (zero without any), so
+    /// that a task which reuses a related task's weights also starts from its offsets.
+    fn related_bias(&self, related: &[TaskId]) -> anyhow::Result<Vec<f32>> {
+        let mut bias = vec![0.0f32; self.out_dim];
+        for r in related {
+            let b = self.biases.get(r).with_context(|| format!("{}: related task {r} has not finished", self.name))?;
+            bias.iter_mut().zip(b).for_each(|(acc, v)| *acc += v / related.len() as f32);
+        }
+        Ok(bias)
+    }
+
+    /// Starts training `task`: fine-tune mode if it already finished, otherwise a fresh bias
+    /// (the mean of the related tasks' biases, zero without any),
     /// sigma back to its initial value, and mu += delta on the elements of related tasks' masks (2.6).
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
         anyhow::ensure!(self.training.is_none(), "{}: begin_task({task}) while task {} is still in progress", self.name, self.training.as_ref().map_or(0, |t| t.task));
         let fine_tune = self.masks.contains_key(&task);
         let bias = match self.biases.get(&task) {
-            Some(b) => var_from(b.clone(), &[self.out_dim])?,
-            None => var_from(vec![0.0; self.out_dim], &[self.out_dim])?,
+            Some(b) => b.clone(),
+            None => self.related_bias(related)?,
         };
+        let bias = var_from(bias, &[self.out_dim])?;
         if !fine_tune {
             set_var(&self.log_sigma, vec![(self.cfg.sigma_init as f32).ln()])?;
             let mut mu = var_values(&self.score_mean)?;
