@@ -71,10 +71,26 @@ fn default_iterations() -> usize {
     300
 }
 
+/// What the learner knows before a sequence starts, for checking related-task names.
+#[derive(Debug, Clone)]
+pub enum KnownBefore {
+    /// Not known yet (a base policy is still to be loaded): names outside the sequence pass.
+    Pending,
+    /// Exactly these tasks (empty: none).
+    Tasks(Vec<String>),
+}
+
 impl Sequence {
     /// Checks every name and reference; the error names the entry (1-based)
-    /// and what is wrong.
+    /// and what is wrong. Related tasks that are not earlier in the sequence are
+    /// left for [`Sequence::validate_with`] once the tasks learned before it are known.
     pub fn validate(&self) -> anyhow::Result<()> {
+        self.validate_with(KnownBefore::Pending)
+    }
+
+    /// [`Sequence::validate`] given what is learned before the sequence starts: a related task
+    /// must be trained earlier in the sequence or be one of `known`'s tasks.
+    pub fn validate_with(&self, known: KnownBefore) -> anyhow::Result<()> {
         anyhow::ensure!(!self.tasks.is_empty(), "the sequence has no [[task]] entries");
         for (i, task) in self.tasks.iter().enumerate() {
             let at = || format!("task {} ({})", i + 1, task.name);
@@ -87,10 +103,18 @@ impl Sequence {
             }
             for related in &task.related {
                 let earlier = self.tasks[..i].iter().any(|t| &t.name == related);
+                let known_before = match &known {
+                    KnownBefore::Pending => true,
+                    KnownBefore::Tasks(tasks) => tasks.contains(related),
+                };
                 anyhow::ensure!(
-                    earlier,
-                    "{}: related task {related:?} is not trained earlier in the sequence",
-                    at()
+                    earlier || known_before,
+                    "{}: related task {related:?} is not trained earlier in the sequence{}",
+                    at(),
+                    match &known {
+                        KnownBefore::Tasks(t) if !t.is_empty() => format!(" nor by the base policy (which has {t:?})"),
+                        _ => " and the run has no base policy ([run] base_policy)".to_string(),
+                    }
                 );
             }
         }
@@ -121,7 +145,7 @@ mod tests {
 
     fn parse(text: &str) -> anyhow::Result<Sequence> {
         let seq: Sequence = toml::from_str(text)?;
-        seq.validate()?;
+        seq.validate_with(KnownBefore::Tasks(Vec::new()))?;
         Ok(seq)
     }
 
@@ -150,5 +174,17 @@ mod tests {
                 .unwrap_err()
         );
         assert!(err.contains("not trained earlier"), "{err}");
+    }
+
+    #[test]
+    fn a_related_task_may_be_one_learned_before_the_sequence() {
+        let seq: Sequence = toml::from_str("[[task]]\nname = \"crash:FL\"\nrelated = [\"none\"]\n").unwrap();
+        // Before the base policy is read the name cannot be checked; once it is, it must be there.
+        seq.validate().unwrap();
+        seq.validate_with(KnownBefore::Tasks(vec!["none".into()])).unwrap();
+        let err = format!("{:#}", seq.validate_with(KnownBefore::Tasks(vec!["invert:RR".into()])).unwrap_err());
+        assert!(err.contains("task 1 (crash:FL)") && err.contains("\"none\"") && err.contains("base policy"), "{err}");
+        let err = format!("{:#}", seq.validate_with(KnownBefore::Tasks(Vec::new())).unwrap_err());
+        assert!(err.contains("no base policy"), "{err}");
     }
 }

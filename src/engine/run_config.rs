@@ -21,7 +21,7 @@
 //! the file and the key.
 
 use crate::cl::ours::{SwitchOverrides, Switches};
-use crate::cl::sequence::Sequence;
+use crate::cl::sequence::{KnownBefore, Sequence};
 use crate::config::Config;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
@@ -142,6 +142,11 @@ impl RunConfig {
             Some(v) => v.try_into().map_err(|e| anyhow::anyhow!("in [run]: {e}"))?,
             None => RunSection::default(),
         };
+        // Without a base policy nothing is learned before the sequence: every related task
+        // must come earlier in it. With one, its tasks are checked once it is loaded.
+        if run.base_policy.is_none() {
+            sequence.validate_with(KnownBefore::Tasks(Vec::new()))?;
+        }
         Ok(Self { config, method, switches, eval, run, sequence })
     }
 }

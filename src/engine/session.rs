@@ -21,9 +21,10 @@ use super::results::{SessionResults, StepRecord, TaskCurve};
 use crate::cl::method::ContinualMethod;
 use crate::cl::metrics::EvalMatrix;
 use crate::cl::ours::{SwitchOverrides, Switches};
-use crate::cl::sequence::{Sequence, TransferInit};
+use crate::cl::sequence::{KnownBefore, Sequence, TransferInit};
 use crate::config::net::MaskConfig;
 use crate::nn::TaskId;
+use anyhow::Context;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -126,6 +127,7 @@ impl Session {
     /// and are evaluated after every step. Only before any training.
     pub fn with_learned_tasks(mut self, learned: &[String]) -> anyhow::Result<Self> {
         anyhow::ensure!(self.results.steps.is_empty() && self.in_progress.is_none(), "learned tasks are declared before training");
+        self.sequence.validate_with(KnownBefore::Tasks(learned.to_vec()))?;
         let mut tasks = learned.to_vec();
         for t in self.sequence.distinct_tasks() {
             if !tasks.contains(&t) {
@@ -360,8 +362,10 @@ impl Session {
 
     /// Task ids for the transfer initialisation (METHOD.md 2.6).
     fn resolve_related(&self, names: &[String], init: TransferInit, task: TaskId, seed: u64) -> anyhow::Result<Vec<TaskId>> {
-        let id = |n: &String| self.results.tasks.iter().position(|t| t == n).expect("validated names");
-        let named: Vec<TaskId> = names.iter().map(id).collect();
+        let id = |n: &String| {
+            self.results.tasks.iter().position(|t| t == n).with_context(|| format!("related task {n:?} is neither in the sequence nor learned before it"))
+        };
+        let named: Vec<TaskId> = names.iter().map(id).collect::<anyhow::Result<_>>()?;
         match init {
             TransferInit::Scratch => Ok(Vec::new()),
             TransferInit::Related => Ok(named),
