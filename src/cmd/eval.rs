@@ -1,7 +1,8 @@
 //! `quadcl eval --policy DIR --task TASK [--episodes N] [--seed S] --json`:
 //! one episode per environment with the deterministic policy, random
 //! commands from the env config (vx in [-1, 1] m/s, wz in [-pi/2, pi/2] rad/s
-//! by default); prints mean return, tracking errors, fall rate, survival.
+//! by default) and the training config's randomisation and pushes (`--no-pushes`
+//! turns the pushes off); prints mean return, tracking errors, fall rate, survival.
 
 use crate::rl::sim_env::SimTrainEnv;
 use crate::sim::Perturbation;
@@ -23,6 +24,10 @@ pub struct EvalArgs {
     /// Seed of the evaluation environments (commands, randomisation).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Evaluate without the training pushes (by default the env config's pushes stay on,
+    /// so a fall rate includes push recovery; this separates tracking from it).
+    #[arg(long)]
+    pub no_pushes: bool,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -41,7 +46,11 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         loaded
     };
     let agent = &loaded.policy.agent;
-    let env_cfg = &loaded.policy.info.config.env;
+    let mut env_cfg = loaded.policy.info.config.env.clone();
+    if args.no_pushes {
+        env_cfg.push_interval_s = 0.0;
+    }
+    let env_cfg = &env_cfg;
     let mut env = SimTrainEnv::new(env_cfg, &task, args.episodes, args.seed)?;
     // An episode lasts at most `episode_s`; allow a margin.
     let max_steps = (f64::from(env_cfg.episode_s) / f64::from(env_cfg.policy_dt())).ceil() as usize + 10;
