@@ -24,14 +24,20 @@ hidden = [16]
 hidden = [16]
 "#;
 
-#[test]
-fn one_iteration_of_train_then_eval_prints_the_documented_json() {
+/// One iteration of `quadcl train` on TINY in a fresh folder; returns it and the run's output folder.
+fn train_tiny() -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let config = dir.path().join("tiny.toml");
     std::fs::write(&config, TINY).unwrap();
     let out = dir.path().join("run");
     let status = quadcl().args(["train", "--config"]).arg(&config).arg("--out").arg(&out).status().unwrap();
     assert!(status.success());
+    (dir, out)
+}
+
+#[test]
+fn one_iteration_of_train_then_eval_prints_the_documented_json() {
+    let (_dir, out) = train_tiny();
     for file in ["config.toml", "metrics.jsonl", "summary.json", "policy/manifest.json", "policy/model.safetensors"] {
         assert!(out.join(file).exists(), "missing {file}");
     }
@@ -67,12 +73,7 @@ fn eval_of_a_training_checkpoint_equals_the_policy_its_task_ends_with() {
     // The last checkpoint is written before the task ends; evaluated, it ends the
     // task in memory (masks = top-k of the score means) and must score exactly as
     // the policy that training wrote after ending the task.
-    let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("tiny.toml");
-    std::fs::write(&config, TINY).unwrap();
-    let out = dir.path().join("run");
-    let status = quadcl().args(["train", "--config"]).arg(&config).arg("--out").arg(&out).status().unwrap();
-    assert!(status.success());
+    let (_dir, out) = train_tiny();
     let eval = |policy: std::path::PathBuf| {
         let output = quadcl().args(["eval", "--policy"]).arg(policy).args(["--episodes", "3", "--seed", "2", "--json"]).output().unwrap();
         assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
@@ -85,11 +86,7 @@ fn eval_of_a_training_checkpoint_equals_the_policy_its_task_ends_with() {
 
 #[test]
 fn gait_reports_the_contact_pattern_of_a_held_command() {
-    let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("tiny.toml");
-    std::fs::write(&config, TINY).unwrap();
-    let out = dir.path().join("run");
-    assert!(quadcl().args(["train", "--config"]).arg(&config).arg("--out").arg(&out).status().unwrap().success());
+    let (_dir, out) = train_tiny();
     let output = quadcl()
         .args(["gait", "--policy"])
         .arg(out.join("policy"))

@@ -20,7 +20,7 @@ const DIAGONAL: [(usize, usize); 2] = [(0, 3), (1, 2)];
 const LATERAL: [(usize, usize); 2] = [(0, 2), (1, 3)];
 const FORE_AFT: [(usize, usize); 2] = [(0, 1), (2, 3)];
 
-/// The summary of a contact sequence.
+/// A recorded gait: the command, what the robot did, and the contact summary.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GaitReport {
     /// The command held during the recording (vx m/s, vy m/s, wz rad/s).
@@ -28,20 +28,11 @@ pub struct GaitReport {
     /// Seconds recorded (after the warm-up) and whether the robot fell.
     pub seconds: f32,
     pub fell: bool,
-    /// Mean forward and yaw velocity over the recording (trunk frame), m/s and rad/s.
+    /// Mean forward and yaw velocity over the recording (trunk heading, world yaw), m/s and rad/s.
     pub mean_vx: f32,
     pub mean_wz: f32,
-    /// Fraction of steps each foot (FL, FR, RL, RR) is on the ground.
-    pub duty_factor: [f32; 4],
-    /// Touchdowns per second per foot.
-    pub touchdowns_per_s: [f32; 4],
-    /// Fraction of steps the two feet of a pair are in the same state, for the
-    /// diagonal (FL-RR, FR-RL), lateral (FL-RL, FR-RR) and fore-aft (FL-FR, RL-RR) pairs.
-    pub diagonal_agreement: f32,
-    pub lateral_agreement: f32,
-    pub fore_aft_agreement: f32,
-    /// `trot`, `pace`, `bound`, `stand` (every foot down nearly always) or `irregular`.
-    pub gait: String,
+    #[serde(flatten)]
+    pub contacts: GaitSummary,
     /// The last two seconds as one line per foot: `#` on the ground, `.` in the air.
     pub contact_strip: Vec<String>,
 }
@@ -71,13 +62,18 @@ pub fn analyse(contacts: &[[bool; 4]], dt: f32) -> GaitSummary {
 }
 
 /// What [`analyse`] finds in a contact sequence.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GaitSummary {
+    /// Fraction of steps each foot (FL, FR, RL, RR) is on the ground.
     pub duty_factor: [f32; 4],
+    /// Touchdowns per second per foot.
     pub touchdowns_per_s: [f32; 4],
+    /// Fraction of steps the two feet of a pair are in the same state, for the
+    /// diagonal (FL-RR, FR-RL), lateral (FL-RL, FR-RR) and fore-aft (FL-FR, RL-RR) pairs.
     pub diagonal_agreement: f32,
     pub lateral_agreement: f32,
     pub fore_aft_agreement: f32,
+    /// `trot`, `pace`, `bound`, `stand` (every foot down nearly always) or `irregular`.
     pub gait: String,
 }
 
@@ -134,19 +130,13 @@ pub fn record(agent: &Agent, env_cfg: &EnvConfig, robot: &RobotModel, task: &Per
         }
     }
     let n = contacts.len().max(1) as f32;
-    let summary = analyse(&contacts, dt);
     Ok(GaitReport {
         command,
         seconds: contacts.len() as f32 * dt,
         fell,
         mean_vx: vx / n,
         mean_wz: wz / n,
-        duty_factor: summary.duty_factor,
-        touchdowns_per_s: summary.touchdowns_per_s,
-        diagonal_agreement: summary.diagonal_agreement,
-        lateral_agreement: summary.lateral_agreement,
-        fore_aft_agreement: summary.fore_aft_agreement,
-        gait: summary.gait,
+        contacts: analyse(&contacts, dt),
         contact_strip: contact_strip(&contacts, (2.0 / dt).round() as usize),
     })
 }
