@@ -82,3 +82,29 @@ fn resuming_with_another_config_or_task_is_an_error_that_changes_nothing() {
     let finished = format!("{:#}", quadcl::rl::policy_dir::load_training_checkpoint(&dir.path().join("policy")).unwrap_err());
     assert!(finished.contains("not a checkpoint of a run in progress"), "{finished}");
 }
+
+#[test]
+fn ending_a_task_at_its_checkpoint_drops_later_rows_and_keeps_the_time_splits() {
+    // Interrupted after writing the row of iteration 5 but before its checkpoint:
+    // resuming with --iterations 4 only ends the task at the checkpoint.
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = toy_config(4);
+    let mut env = ToyEnv::new(16, 10, cfg.seed);
+    train_from(&cfg, "none", &mut env, dir.path(), false, None).unwrap();
+    let rows = metric_rows(dir.path());
+    let path = dir.path().join("metrics.jsonl");
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    text.push_str(&serde_json::to_string(&rows[3]).unwrap().replace("\"charts/iteration\":4.0", "\"charts/iteration\":5.0"));
+    text.push('\n');
+    std::fs::write(&path, text).unwrap();
+    assert_eq!(metric_rows(dir.path()).len(), 5);
+
+    let (agent, state) = load_resume_point(&cfg, "none", dir.path()).unwrap();
+    let mut env = ToyEnv::new(16, 10, resume_seed(cfg.seed, state.iteration));
+    let summary = train_from(&cfg, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
+    assert_eq!(metric_rows(dir.path()), rows, "the row past the checkpoint is dropped");
+    let sum = |key: &str| rows.iter().map(|r| r[key].as_f64().unwrap()).sum::<f64>();
+    assert_eq!(summary.update_s, sum("time/update_s"));
+    assert_eq!(summary.env_s, sum("time/env_s"));
+    assert!(summary.update_s > 0.0);
+}

@@ -180,13 +180,17 @@ pub fn train_from(
     );
     let start = Instant::now();
     let wall_before = done.as_ref().map_or(0.0, |s| s.wall_s);
+    // A resumed run's time splits start from the kept rows, so the summary covers the whole run.
+    let kept_time = |key: &str| -> f64 {
+        log.lines().filter_map(|l| serde_json::from_str::<Metrics>(l).ok()).filter_map(|m| m.get(key).copied()).sum()
+    };
     let mut summary = TrainSummary {
         iterations: 0,
         env_steps: done.as_ref().map_or(0, |s| s.env_steps),
         wall_s: 0.0,
-        env_s: 0.0,
-        policy_s: 0.0,
-        update_s: 0.0,
+        env_s: kept_time("time/env_s"),
+        policy_s: kept_time("time/policy_s"),
+        update_s: kept_time("time/update_s"),
         last: Metrics::new(),
     };
     let dims = env.dims();
@@ -231,6 +235,8 @@ pub fn train_from(
         summary.last = m;
     }
     bar.finish();
+    // Also when a resume had nothing left to train: the rows after the checkpoint go.
+    write_atomic(&out.join("metrics.jsonl"), log.as_bytes())?;
     learner.end_task()?;
     save_policy(&learner.agent, &[task.to_string()], &info_at(cfg.iterations), &out.join("policy"))?;
     summary.iterations = cfg.iterations;
