@@ -36,10 +36,20 @@ struct LogObserver {
     echo: bool,
 }
 
+/// Without a progress bar (under nohup), every this many iterations a line on stderr says
+/// where training is, so a long run can be followed with `tail -f`.
+const ECHO_EVERY: usize = 25;
+
 impl Observer for LogObserver {
     fn on_event(&mut self, event: &Event) {
         let line = match event {
-            Event::Iteration { .. } | Event::MaskStats { .. } => return,
+            Event::Iteration { step, iteration, iterations, metrics, .. } => {
+                if self.echo && (iteration % ECHO_EVERY == 0 || iteration == iterations) {
+                    eprintln!("{}", iteration_line(*step, *iteration, *iterations, metrics));
+                }
+                return;
+            }
+            Event::MaskStats { .. } => return,
             Event::Evaluated { after_step, evaluation: e } => format!(
                 "after step {after_step}: {} performance {:.4} return {:.3} lin_vel_err {:.3} ang_vel_err {:.3} fall_rate {:.3}",
                 e.task, e.performance, e.mean_return, e.lin_vel_err, e.ang_vel_err, e.fall_rate
@@ -54,6 +64,26 @@ impl Observer for LogObserver {
             l.push('\n');
         }
     }
+}
+
+/// The echo line of iteration `iteration` (1-based) of `iterations`:
+/// `step 0 iteration 25/500: return 3.21 lin_vel_err 0.41 ang_vel_err 0.62 fall_rate 0.20 SPS 3300`
+/// (`-` for a figure the iteration did not report, e.g. before any episode ended).
+fn iteration_line(step: usize, iteration: usize, iterations: usize, metrics: &crate::engine::learner::Metrics) -> String {
+    let mut line = format!("step {step} iteration {iteration}/{iterations}:");
+    for (label, key, digits) in [
+        ("return", "charts/episodic_return", 2),
+        ("lin_vel_err", "charts/lin_vel_err", 3),
+        ("ang_vel_err", "charts/ang_vel_err", 3),
+        ("fall_rate", "charts/fall_rate", 2),
+        ("SPS", "charts/SPS", 0),
+    ] {
+        match metrics.get(key) {
+            Some(v) => line.push_str(&format!(" {label} {v:.digits$}")),
+            None => line.push_str(&format!(" {label} -")),
+        }
+    }
+    line
 }
 
 /// A progress bar over every iteration of the sequence.
@@ -159,4 +189,18 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
         }
     }
     Ok(MetricsFile::new(session.results(), total_steps, &reference_curve))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_iteration_line_shows_missing_figures_as_a_dash() {
+        let metrics = [("charts/episodic_return".to_string(), 3.214), ("charts/SPS".to_string(), 3301.7)].into_iter().collect();
+        assert_eq!(
+            iteration_line(1, 25, 500, &metrics),
+            "step 1 iteration 25/500: return 3.21 lin_vel_err - ang_vel_err - fall_rate - SPS 3302"
+        );
+    }
 }
