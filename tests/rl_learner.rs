@@ -1,29 +1,11 @@
 //! The PPO learner end to end on the point-mass toy environment, with the
 //! masked networks training their weights and masks together (task 0).
 
-use quadcl::config::{Config, PpoConfig};
+mod rl_common;
+use quadcl::config::Config;
+use rl_common::small_ppo_config;
 use quadcl::rl::toy_env::ToyEnv;
 use quadcl::rl::{Agent, PpoLearner, TrainEnv};
-
-fn small_config() -> Config {
-    let mut cfg = Config {
-        ppo: PpoConfig {
-            num_envs: 32,
-            steps_per_env: 16,
-            cenet_decoder_hidden: vec![16],
-            cenet_latent_dim: 2,
-            init_action_std: 0.5,
-            ..PpoConfig::default()
-        },
-        ..Config::default()
-    };
-    cfg.net.actor.hidden = vec![32, 32];
-    cfg.net.critic.hidden = vec![32, 32];
-    cfg.net.cenet.hidden = vec![16];
-    // These tests check PPO, not the capacity: every weight may be used.
-    cfg.net.mask.capacity = 1.0;
-    cfg
-}
 
 fn run(cfg: &Config, iterations: usize, seed: u64) -> Vec<quadcl::rl::Metrics> {
     let mut env = ToyEnv::new(cfg.ppo.num_envs, 10, seed);
@@ -35,7 +17,7 @@ fn run(cfg: &Config, iterations: usize, seed: u64) -> Vec<quadcl::rl::Metrics> {
 
 #[test]
 fn one_iteration_reports_every_namespaced_metric() {
-    let metrics = run(&small_config(), 1, 1);
+    let metrics = run(&small_ppo_config(), 1, 1);
     for key in [
         "charts/episodic_return",
         "charts/SPS",
@@ -59,7 +41,7 @@ fn one_iteration_reports_every_namespaced_metric() {
 
 #[test]
 fn ppo_learns_to_track_the_toy_command() {
-    let cfg = small_config();
+    let cfg = small_ppo_config();
     let metrics = run(&cfg, 40, 2);
     let first = metrics[0]["charts/mean_step_reward"];
     let last = metrics[metrics.len() - 1]["charts/mean_step_reward"];
@@ -69,7 +51,7 @@ fn ppo_learns_to_track_the_toy_command() {
 
 #[test]
 fn same_seed_gives_the_same_training_curve() {
-    let cfg = small_config();
+    let cfg = small_ppo_config();
     let strip = |ms: Vec<quadcl::rl::Metrics>| -> Vec<Vec<(String, f64)>> {
         ms.into_iter()
             .map(|m| m.into_iter().filter(|(k, _)| !k.starts_with("time/") && k != "charts/SPS").collect())

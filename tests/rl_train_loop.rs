@@ -1,30 +1,17 @@
 //! `rl::train` end to end on the toy environment: files written, policy
 //! directory round trip through `nn::checkpoint`, evaluation.
 
-use quadcl::config::{Config, PpoConfig};
+mod rl_common;
+use quadcl::config::Config;
+use rl_common::small_ppo_config;
 use quadcl::rl::policy_dir::{load_policy, save_policy};
 use quadcl::rl::toy_env::ToyEnv;
 use quadcl::rl::{evaluate, train, Agent, TrainEnv};
 
 fn toy_config(iterations: usize) -> Config {
-    let mut cfg = Config {
-        seed: 5,
-        ppo: PpoConfig {
-            num_envs: 32,
-            steps_per_env: 16,
-            iterations,
-            cenet_decoder_hidden: vec![16],
-            cenet_latent_dim: 2,
-            init_action_std: 0.5,
-            ..PpoConfig::default()
-        },
-        ..Config::default()
-    };
-    cfg.net.actor.hidden = vec![32, 32];
-    cfg.net.critic.hidden = vec![32, 32];
-    cfg.net.cenet.hidden = vec![16];
-    // These tests check PPO, not the capacity: every weight may be used.
-    cfg.net.mask.capacity = 1.0;
+    let mut cfg = small_ppo_config();
+    cfg.seed = 5;
+    cfg.ppo.iterations = iterations;
     cfg
 }
 

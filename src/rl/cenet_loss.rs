@@ -77,17 +77,7 @@ pub fn cenet_loss(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use candle_core::Device;
-
-    fn t2(v: &[f32], rows: usize) -> Tensor {
-        Tensor::new(v, &Device::Cpu).unwrap().reshape((rows, v.len() / rows)).unwrap()
-    }
-    fn scalar(x: &Tensor) -> f64 {
-        f64::from(x.to_scalar::<f32>().unwrap())
-    }
-    fn close(a: f64, b: f64) {
-        assert!((a - b).abs() < 1e-5, "{a} vs {b}");
-    }
+    use crate::rl::test_tensors::{close, scalar, t2};
 
     #[test]
     fn encoder_output_splits_into_velocity_mean_and_clamped_logvar() {

@@ -123,15 +123,7 @@ mod tests {
     fn t(v: &[f32]) -> Tensor {
         Tensor::new(v, &Device::Cpu).unwrap()
     }
-    fn t2(v: &[f32], rows: usize) -> Tensor {
-        Tensor::new(v, &Device::Cpu).unwrap().reshape((rows, v.len() / rows)).unwrap()
-    }
-    fn scalar(x: &Tensor) -> f64 {
-        f64::from(x.to_scalar::<f32>().unwrap())
-    }
-    fn close(a: f64, b: f64) {
-        assert!((a - b).abs() < 1e-5, "{a} vs {b}");
-    }
+    use crate::rl::test_tensors::{close, scalar, t2};
 
     /// a = (1, 0), mean = (0, 0), log_std = (0, ln 2):
     /// dim 0: -0.5 * 1 - 0 - 0.9189385 = -1.4189385

@@ -27,6 +27,8 @@ pub mod policy_dir;
 pub mod ppo;
 pub mod rollout;
 pub mod sim_env;
+#[cfg(test)]
+mod test_tensors;
 pub mod toy_env;
 pub mod trainer;
 
