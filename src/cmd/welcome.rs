@@ -10,6 +10,8 @@ pub fn run() {
          \x20 run --config scenes/smoke.toml --out runs/smoke    a 3-task sequence in seconds: metrics.json, checkpoints\n\
          \x20 train --config scenes/train-base.toml --out runs/base [--resume]   the base walking policy (long)\n\
          \x20 eval --policy DIR --task none --episodes 32 --json     return, tracking errors, fall rate\n\
+         \x20 eval --policy policies/base-a1-flat --task none         the shipped walking base policy\n\
+         \x20 gait --policy policies/base-a1-flat --vx 0.5          its contact pattern (a trot)\n\
          \x20 masks --policy DIR [--json]                           which parameters each task claims\n\
          \x20 finetune --policy DIR --task TASK --shift FILE --out DIR   private-parameter fine-tuning\n\
          \x20 bench [--json]                                        simulator and network throughput\n\
