@@ -38,15 +38,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let task: Perturbation = args.task.parse()?;
     // A policy trained on several tasks recalls the one asked for; a single-task
     // policy (the base policy) is evaluated on any perturbation.
-    let name = task.to_string();
-    let loaded = crate::rl::policy_dir::load_policy_or_checkpoint(&args.policy)?;
-    let loaded = if loaded.policy.tasks.len() > 1 && loaded.policy.tasks.contains(&name) && !loaded.in_progress {
-        crate::rl::policy_dir::PolicyOrCheckpoint { policy: crate::rl::policy_dir::load_policy(&args.policy, Some(&name))?, in_progress: false }
-    } else {
-        loaded
-    };
-    let agent = &loaded.policy.agent;
-    let mut env_cfg = loaded.policy.info.config.env.clone();
+    let loaded = crate::rl::policy_dir::load_for_task(&args.policy, &task.to_string())?;
+    let agent = &loaded.agent;
+    let mut env_cfg = loaded.info.config.env.clone();
     if args.no_pushes {
         env_cfg.push_interval_s = 0.0;
     }

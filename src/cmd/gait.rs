@@ -37,13 +37,7 @@ pub struct GaitArgs {
 pub fn run(args: GaitArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.seconds > 0.0 && args.seconds.is_finite(), "--seconds must be > 0, got {}", args.seconds);
     let task: Perturbation = args.task.parse()?;
-    let loaded = crate::rl::policy_dir::load_policy_or_checkpoint(&args.policy)?;
-    let name = task.to_string();
-    let loaded = if loaded.policy.tasks.len() > 1 && loaded.policy.tasks.contains(&name) && !loaded.in_progress {
-        crate::rl::policy_dir::load_policy(&args.policy, Some(&name))?
-    } else {
-        loaded.policy
-    };
+    let loaded = crate::rl::policy_dir::load_for_task(&args.policy, &task.to_string())?;
     let env_cfg = &loaded.info.config.env;
     let robot = load_robot(env_cfg)?;
     let report = record(&loaded.agent, env_cfg, &robot, &task, [args.vx, 0.0, args.wz], 2.0, args.seconds, args.seed)?;

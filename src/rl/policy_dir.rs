@@ -145,3 +145,14 @@ pub fn load_policy_or_checkpoint(dir: &Path) -> anyhow::Result<PolicyOrCheckpoin
     policy.agent.end_task(&mut rng)?;
     Ok(PolicyOrCheckpoint { policy, in_progress: true })
 }
+
+/// What `quadcl eval` and `quadcl gait` run on `task`: a policy that learned `task` recalls
+/// it; any other policy (a base policy run on a perturbation) uses its last task; a checkpoint
+/// still training uses its task, ended in memory ([`load_policy_or_checkpoint`]).
+pub fn load_for_task(dir: &Path, task: &str) -> anyhow::Result<LoadedPolicy> {
+    let loaded = load_policy_or_checkpoint(dir)?;
+    if !loaded.in_progress && loaded.policy.tasks.len() > 1 && loaded.policy.tasks.iter().any(|t| t == task) {
+        return load_policy(dir, Some(task));
+    }
+    Ok(loaded.policy)
+}
