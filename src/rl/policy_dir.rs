@@ -104,7 +104,11 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
 /// statistics follow the data again. A policy whose tasks all ended is an
 /// error: a finished task can only be fine-tuned (METHOD 2.5), not resumed.
 pub fn load_training_checkpoint(dir: &Path) -> anyhow::Result<LoadedPolicy> {
-    let mut loaded = load_policy(dir, None)?;
+    into_training(load_policy(dir, None)?, dir)
+}
+
+/// The checks and mode changes of [`load_training_checkpoint`] on a policy already read from `dir`.
+fn into_training(mut loaded: LoadedPolicy, dir: &Path) -> anyhow::Result<LoadedPolicy> {
     let task = loaded.agent.task;
     for net in loaded.agent.networks() {
         anyhow::ensure!(
@@ -134,11 +138,11 @@ pub struct PolicyOrCheckpoint {
 /// `quadcl train`) as if its task ended now: METHOD 2.4's masks, the top-k of the current
 /// score means without noise. How a long run is evaluated while it trains.
 pub fn load_policy_or_checkpoint(dir: &Path) -> anyhow::Result<PolicyOrCheckpoint> {
-    let saved = checkpoint::load_policy(dir)?;
-    if saved.networks.iter().all(|n| n.current_task().is_none()) {
-        return Ok(PolicyOrCheckpoint { policy: load_policy(dir, None)?, in_progress: false });
+    let loaded = load_policy(dir, None)?;
+    if loaded.agent.networks().iter().all(|n| n.current_task().is_none()) {
+        return Ok(PolicyOrCheckpoint { policy: loaded, in_progress: false });
     }
-    let mut policy = load_training_checkpoint(dir)?;
+    let mut policy = into_training(loaded, dir)?;
     tracing::info!("{}: task {:?} is still training; using the masks its score means give now", dir.display(), policy.tasks[policy.agent.task]);
     // end_task also redraws the vacant weights for a next task: they play no part in this one.
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
