@@ -1,8 +1,12 @@
 //! `quadcl train --resume`: a run interrupted after a checkpoint goes on from
 //! it, and a checkpoint that does not match is a clear error that leaves the
-//! files as they were.
+//! files as they were; settings that act only at the end of the task may
+//! differ.
 
+use candle_core::Tensor;
 use quadcl::config::{Config, PpoConfig};
+use quadcl::nn::ElementState;
+use quadcl::rl::policy_dir::load_policy;
 use quadcl::rl::toy_env::ToyEnv;
 use quadcl::rl::trainer::{load_resume_point, resume_seed, train_from};
 
@@ -107,4 +111,42 @@ fn ending_a_task_at_its_checkpoint_drops_later_rows_and_keeps_the_time_splits() 
     assert_eq!(summary.update_s, sum("time/update_s"));
     assert_eq!(summary.env_s, sum("time/env_s"));
     assert!(summary.update_s > 0.0);
+}
+
+#[test]
+fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
+    // The private share and re-initialisation act only when the task ends (METHOD.md 2.4):
+    // ending the same checkpoint with p = 0 gives the same task (masks, recall) with no
+    // private element; any other change is still refused.
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = toy_config(4);
+    let mut env = ToyEnv::new(16, 10, cfg.seed);
+    train_from(&cfg, "none", &mut env, dir.path(), false, None).unwrap();
+    let first = load_policy(&dir.path().join("policy"), None).unwrap();
+
+    let mut shared = toy_config(4);
+    (shared.net.mask.private_share, shared.net.mask.reinit_scale) = (0.0, 0.1);
+    let mut wider = shared.clone();
+    wider.net.mask.capacity = 0.3;
+    let err = format!("{:#}", load_resume_point(&wider, "none", dir.path()).unwrap_err());
+    assert!(err.contains("another configuration"), "{err}");
+
+    let (agent, state) = load_resume_point(&shared, "none", dir.path()).unwrap();
+    let mut env = ToyEnv::new(16, 10, resume_seed(shared.seed, state.iteration));
+    train_from(&shared, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
+    let ended = load_policy(&dir.path().join("policy"), None).unwrap();
+
+    let private = |p: &quadcl::rl::policy_dir::LoadedPolicy| -> usize {
+        p.agent.networks().iter().flat_map(|n| n.layers()).map(|l| l.states().iter().filter(|s| matches!(s, ElementState::Private(_))).count()).sum()
+    };
+    assert!(private(&first) > 0, "the default p = 0.02 made some elements private");
+    assert_eq!(private(&ended), 0);
+    let x = Tensor::ones((3, first.agent.actor.sizes()[0]), candle_core::DType::F32, &candle_core::Device::Cpu).unwrap();
+    let out = |p: &quadcl::rl::policy_dir::LoadedPolicy| p.agent.actor.forward_task(0, &x).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
+    assert_eq!(out(&first), out(&ended), "the task's recall is unchanged");
+    for (a, b) in first.agent.networks().iter().zip(ended.agent.networks()) {
+        for (la, lb) in a.layers().iter().zip(b.layers()) {
+            assert_eq!(la.task_mask(0), lb.task_mask(0), "{}", la.name());
+        }
+    }
 }

@@ -71,6 +71,12 @@ pub struct MaskConfig {
     pub sigma_max: f64,
     /// Re-initialise vacant weights and redraw soft-score means at the end of each task (METHOD.md 2.4).
     pub reinit: bool,
+    /// The range of re-initialised vacant weights as a fraction of the initialiser's (1 = METHOD.md
+    /// 2.4 as written). Below 1, a later task that selects all of a related task's elements plus
+    /// fresh vacant ones starts close to the related task's function: at 1 the fresh elements
+    /// (a quarter of a row's selection at lambda 0.25) add noise of about a third of the layer's
+    /// output variance, and the new task's first policy does not walk. Acts at the end of a task.
+    pub reinit_scale: f64,
     /// Forward-transfer bonus on related tasks' elements, in units of `score_init_std` (METHOD.md 2.6).
     pub transfer_bonus: f64,
 }
@@ -91,12 +97,20 @@ impl Default for MaskConfig {
             sigma_floor: 1e-3,
             sigma_max: 0.05,
             reinit: true,
+            reinit_scale: 1.0,
             transfer_bonus: 3.0,
         }
     }
 }
 
 impl MaskConfig {
+    /// These settings with `other`'s end-of-task ones (`private_share`, `reinit`,
+    /// `reinit_scale`): the ones that act only when a task ends (METHOD.md 2.4), so
+    /// they may change while a task is in progress.
+    pub fn with_end_of_task(&self, other: &MaskConfig) -> MaskConfig {
+        MaskConfig { private_share: other.private_share, reinit: other.reinit, reinit_scale: other.reinit_scale, ..self.clone() }
+    }
+
     /// Checks the ranges of every field; the error names the key and the expected range.
     pub fn validate(&self) -> anyhow::Result<()> {
         let in_unit = |name: &str, v: f64| -> anyhow::Result<()> {
@@ -107,6 +121,7 @@ impl MaskConfig {
         in_unit("vacant_share", self.vacant_share)?;
         in_unit("private_share", self.private_share)?;
         in_unit("sigma_decay", self.sigma_decay)?;
+        in_unit("reinit_scale", self.reinit_scale)?;
         anyhow::ensure!(self.score_init_std > 0.0, "net.mask.score_init_std must be > 0");
         anyhow::ensure!(self.sigma_init >= 0.0 && self.sigma_floor >= 0.0, "net.mask.sigma_init and sigma_floor must be >= 0");
         anyhow::ensure!(self.sigma_max >= self.sigma_floor, "net.mask.sigma_max ({}) must be >= sigma_floor ({})", self.sigma_max, self.sigma_floor);
@@ -175,6 +190,7 @@ mod tests {
             ("entropy_weight", MaskConfig { entropy_weight: f64::NAN, ..MaskConfig::default() }),
             ("transfer_bonus", MaskConfig { transfer_bonus: f64::INFINITY, ..MaskConfig::default() }),
             ("score_init_std", MaskConfig { score_init_std: f64::INFINITY, ..MaskConfig::default() }),
+            ("reinit_scale", MaskConfig { reinit_scale: 1.5, ..MaskConfig::default() }),
         ] {
             let err = cfg.validate().unwrap_err().to_string();
             assert!(err.contains(key), "{key}: {err}");

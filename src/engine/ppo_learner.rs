@@ -161,12 +161,6 @@ impl PpoTaskLearner {
         })
     }
 
-    fn set_mask(agent: &mut Agent, mask: &MaskConfig) -> anyhow::Result<()> {
-        for net in [&mut agent.actor, &mut agent.critic, &mut agent.encoder, &mut agent.decoder] {
-            net.set_mask_config(mask)?;
-        }
-        Ok(())
-    }
 }
 
 impl Learner for PpoTaskLearner {
@@ -175,7 +169,7 @@ impl Learner for PpoTaskLearner {
         let task = Perturbation::from_str(&start.name).map_err(|e| anyhow::anyhow!("task {}: {e}", start.name))?;
         let mut agent = self.agent.take().expect("idle agent");
         let result = (|| {
-            Self::set_mask(&mut agent, &start.mask)?;
+            agent.set_mask_config(&start.mask)?;
             // A repeat starts from its own state, a new task from the last trained one's.
             if let Some(state) = self.states.get(&start.task).or_else(|| self.last_task.and_then(|t| self.states.get(&t))) {
                 Self::install(&mut agent, state)?;

@@ -380,7 +380,8 @@ impl MaskedLinear {
         self.masks.insert(t.task, BitMask::from_bools(&selected));
         self.finish_order.push(t.task);
         if self.cfg.reinit {
-            let dist = Uniform::new_inclusive(-self.init_bound, self.init_bound);
+            let bound = self.init_bound * self.cfg.reinit_scale as f32;
+            let dist = Uniform::new_inclusive(-bound, bound);
             let mut w = var_values(&self.weight)?;
             for (w, s) in w.iter_mut().zip(&self.states) {
                 if *s == ElementState::Vacant {

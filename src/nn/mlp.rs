@@ -75,6 +75,16 @@ impl MaskedMlp {
         Ok(())
     }
 
+    /// Takes `cfg`'s end-of-task settings ([`MaskConfig::with_end_of_task`]); allowed while a
+    /// task is in progress, since training up to its end does not read them.
+    pub fn set_end_of_task(&mut self, cfg: &MaskConfig) -> anyhow::Result<()> {
+        let merged = self.cfg.with_end_of_task(cfg);
+        merged.validate()?;
+        self.layers.iter_mut().for_each(|l| l.cfg = l.cfg.with_end_of_task(cfg));
+        self.cfg = merged;
+        Ok(())
+    }
+
     /// Scales the output layer's initial weights and re-initialisation range
     /// (see [`MaskedLinear::scale_init`]); only before the first task.
     pub fn scale_output_init(&mut self, factor: f32) -> anyhow::Result<()> {

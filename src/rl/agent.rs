@@ -147,6 +147,17 @@ impl Agent {
         [&mut self.actor, &mut self.critic, &mut self.encoder, &mut self.decoder]
     }
 
+    /// The mask settings of every network from now on (a switch change for the next task, or
+    /// end-of-task settings given on resume); nothing learned changes.
+    pub fn set_mask_config(&mut self, mask: &crate::nn::MaskConfig) -> anyhow::Result<()> {
+        self.networks_mut().into_iter().try_for_each(|net| net.set_mask_config(mask))
+    }
+
+    /// Every network takes `mask`'s end-of-task settings, also mid-task (a resumed run ended with another p).
+    pub fn set_end_of_task(&mut self, mask: &crate::nn::MaskConfig) -> anyhow::Result<()> {
+        self.networks_mut().into_iter().try_for_each(|net| net.set_end_of_task(mask))
+    }
+
     /// Starts training `task` (METHOD 2.1; a finished task => fine-tuning).
     /// The observation statistics follow the data again.
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {

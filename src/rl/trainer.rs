@@ -83,8 +83,10 @@ pub fn train(config: &Config, task: &str, env: &mut dyn TrainEnv, out: &Path, pr
 }
 
 /// Reads `out/checkpoint/` for `--resume`: the agent and where the run was.
-/// The checkpoint must belong to the same task and configuration (apart
-/// from `ppo.iterations`, which may grow); errors name the folder.
+/// The checkpoint must belong to the same task and configuration, apart
+/// from `ppo.iterations` (which may grow) and the mask settings that act only
+/// when the task ends (`private_share`, `reinit`, `reinit_scale`: METHOD.md
+/// 2.4), so a finished run can be ended again with other ones; errors name the folder.
 pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Result<(Agent, TrainerState)> {
     let dir = out.join("checkpoint");
     anyhow::ensure!(dir.is_dir(), "{}: no checkpoint to resume from (is `ppo.checkpoint_every` 0?)", dir.display());
@@ -97,6 +99,8 @@ pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Res
     );
     let mut saved = loaded.info.config.clone();
     saved.ppo.iterations = config.ppo.iterations;
+    // What acts only at the end of the task may change: training up to the end does not read it.
+    saved.net.mask = saved.net.mask.with_end_of_task(&config.net.mask);
     anyhow::ensure!(
         &saved == config,
         "{}: the checkpoint was trained with another configuration than the one given (compare {} with the config file)",
@@ -113,7 +117,9 @@ pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Res
         state.iteration,
         config.ppo.iterations
     );
-    Ok((loaded.agent, state))
+    let mut agent = loaded.agent;
+    agent.set_end_of_task(&config.net.mask)?;
+    Ok((agent, state))
 }
 
 /// Writes `checkpoint/` as a whole: into `checkpoint.new/`, then renamed over
