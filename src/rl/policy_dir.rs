@@ -63,19 +63,13 @@ pub fn save_policy(agent: &Agent, tasks: &[String], info: &PolicyInfo, dir: &Pat
 }
 
 /// Reads a policy directory and returns the agent recalling task `task`
-/// (by name; `None`: the last task). Errors name the directory and what is wrong.
+/// (by name; `None`: the last task learned, or the task in training). A task
+/// the policy names but has not learned yet (a sequence's checkpoint lists
+/// every task of the sequence) is an error. Errors name the directory and what is wrong.
 pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolicy> {
     let policy = checkpoint::load_policy(dir)?;
     let info: PolicyInfo = serde_json::from_value(policy.config.clone())
         .with_context(|| format!("{}: the manifest's config is not a quadcl training config", dir.display()))?;
-    let task_id: TaskId = match task {
-        Some(name) => policy
-            .tasks
-            .iter()
-            .position(|t| t == name)
-            .with_context(|| format!("{}: no task {name:?}; it has {:?}", dir.display(), policy.tasks))?,
-        None => policy.tasks.len().checked_sub(1).with_context(|| format!("{}: the policy has no tasks", dir.display()))?,
-    };
     let mut networks = policy.networks;
     let mut take = |name: &str| -> anyhow::Result<crate::nn::MaskedMlp> {
         let i = networks.iter().position(|n| n.name() == name).with_context(|| format!("{}: no network {name}", dir.display()))?;
@@ -86,6 +80,17 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
     agent.critic = take("critic")?;
     agent.encoder = take("cenet_encoder")?;
     agent.decoder = take("cenet_decoder")?;
+    // A sequence's checkpoint names every task of the sequence, learned or not.
+    let learned = learned_tasks(&agent.actor);
+    let names = |ids: &[TaskId]| -> Vec<&str> { ids.iter().filter_map(|&t| policy.tasks.get(t).map(String::as_str)).collect() };
+    let task_id: TaskId = match task {
+        Some(name) => {
+            let t = policy.tasks.iter().position(|t| t == name).with_context(|| format!("{}: no task {name:?}; it has {:?}", dir.display(), policy.tasks))?;
+            anyhow::ensure!(learned.contains(&t), "{}: task {name:?} is not learned yet; learned: {:?}", dir.display(), names(&learned));
+            t
+        }
+        None => agent.actor.current_task().or(learned.last().copied()).with_context(|| format!("{}: the policy has learned no task", dir.display()))?,
+    };
     let extras = &policy.extras;
     let log_std = extras.get(&format!("log_std.t{task_id}")).with_context(|| format!("{}: missing log_std.t{task_id}", dir.display()))?;
     agent.log_std.set(log_std)?;
@@ -96,6 +101,18 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
     agent.task = task_id;
     agent.recall = true;
     Ok(LoadedPolicy { agent, tasks: policy.tasks, info })
+}
+
+/// The tasks a network has learned or is training, in the order they were first trained.
+fn learned_tasks(net: &crate::nn::MaskedMlp) -> Vec<TaskId> {
+    let mut tasks = net.finished_tasks().to_vec();
+    tasks.extend(net.current_task().filter(|t| !tasks.contains(t)));
+    tasks
+}
+
+/// The names of the tasks `policy` has learned (or is training), in the order they were first trained.
+pub fn learned_task_names(policy: &LoadedPolicy) -> Vec<&str> {
+    learned_tasks(&policy.agent.actor).into_iter().filter_map(|t| policy.tasks.get(t).map(String::as_str)).collect()
 }
 
 /// Reads a checkpoint written while its last task was still training (see
@@ -151,11 +168,12 @@ pub fn load_policy_or_checkpoint(dir: &Path) -> anyhow::Result<PolicyOrCheckpoin
 }
 
 /// What `quadcl eval` and `quadcl gait` run on `task`: a policy that learned `task` recalls
-/// it; any other policy (a base policy run on a perturbation) uses its last task; a checkpoint
+/// it; any other policy (or one that names `task` but has not learned it yet) (a base policy run on a perturbation) uses its last task; a checkpoint
 /// still training uses its task, ended in memory ([`load_policy_or_checkpoint`]).
 pub fn load_for_task(dir: &Path, task: &str) -> anyhow::Result<LoadedPolicy> {
     let loaded = load_policy_or_checkpoint(dir)?;
-    if !loaded.in_progress && loaded.policy.tasks.len() > 1 && loaded.policy.tasks.iter().any(|t| t == task) {
+    let learned = learned_task_names(&loaded.policy);
+    if !loaded.in_progress && learned.len() > 1 && learned.contains(&task) {
         return load_policy(dir, Some(task));
     }
     Ok(loaded.policy)
