@@ -37,6 +37,10 @@ pub struct TaskCurve {
     pub lin_vel_err: Vec<f64>,
     /// `charts/ang_vel_err`, rad/s.
     pub ang_vel_err: Vec<f64>,
+    /// `charts/fall_rate`: the share of the iteration's finished episodes that ended in a fall
+    /// (absent from runs written before it was recorded).
+    #[serde(default)]
+    pub fall_rate: Vec<f64>,
 }
 
 impl TaskCurve {
@@ -51,6 +55,7 @@ impl TaskCurve {
         put(&mut self.episodic_return, "charts/episodic_return");
         put(&mut self.lin_vel_err, "charts/lin_vel_err");
         put(&mut self.ang_vel_err, "charts/ang_vel_err");
+        put(&mut self.fall_rate, "charts/fall_rate");
     }
 }
 
@@ -119,5 +124,21 @@ impl SessionResults {
             final_ang_vel_err: final_of(&|e| e.ang_vel_err),
             final_fall_rate: final_of(&|e| e.fall_rate),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_curve_keeps_each_finite_metric_and_skips_the_rest() {
+        let mut curve = TaskCurve::default();
+        let it = |fall: f64, lin: f64| -> Metrics { [("charts/fall_rate".to_string(), fall), ("charts/lin_vel_err".to_string(), lin)].into_iter().collect() };
+        curve.push(&it(0.25, 0.3));
+        curve.push(&it(f64::NAN, 0.2));
+        assert_eq!((curve.fall_rate, curve.lin_vel_err, curve.performance), (vec![0.25], vec![0.3, 0.2], vec![]));
+        let old: TaskCurve = serde_json::from_str(r#"{"step":0,"task":1,"name":"x","performance":[],"episodic_return":[],"lin_vel_err":[],"ang_vel_err":[]}"#).unwrap();
+        assert!(old.fall_rate.is_empty(), "a run written before fall_rate was recorded still reads");
     }
 }
