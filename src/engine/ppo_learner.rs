@@ -160,7 +160,6 @@ impl PpoTaskLearner {
             privileged: agent.privileged_normalizer.clone(),
         })
     }
-
 }
 
 impl Learner for PpoTaskLearner {

@@ -82,11 +82,10 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
     agent.decoder = take("cenet_decoder")?;
     // A sequence's checkpoint names every task of the sequence, learned or not.
     let learned = learned_tasks(&agent.actor);
-    let names = |ids: &[TaskId]| -> Vec<&str> { ids.iter().filter_map(|&t| policy.tasks.get(t).map(String::as_str)).collect() };
     let task_id: TaskId = match task {
         Some(name) => {
             let t = policy.tasks.iter().position(|t| t == name).with_context(|| format!("{}: no task {name:?}; it has {:?}", dir.display(), policy.tasks))?;
-            anyhow::ensure!(learned.contains(&t), "{}: task {name:?} is not learned yet; learned: {:?}", dir.display(), names(&learned));
+            anyhow::ensure!(learned.contains(&t), "{}: task {name:?} is not learned yet; learned: {:?}", dir.display(), task_names(&policy.tasks, &learned));
             t
         }
         None => agent.actor.current_task().or(learned.last().copied()).with_context(|| format!("{}: the policy has learned no task", dir.display()))?,
@@ -110,9 +109,13 @@ fn learned_tasks(net: &crate::nn::MaskedMlp) -> Vec<TaskId> {
     tasks
 }
 
+fn task_names<'a>(tasks: &'a [String], ids: &[TaskId]) -> Vec<&'a str> {
+    ids.iter().filter_map(|&t| tasks.get(t).map(String::as_str)).collect()
+}
+
 /// The names of the tasks `policy` has learned (or is training), in the order they were first trained.
 pub fn learned_task_names(policy: &LoadedPolicy) -> Vec<&str> {
-    learned_tasks(&policy.agent.actor).into_iter().filter_map(|t| policy.tasks.get(t).map(String::as_str)).collect()
+    task_names(&policy.tasks, &learned_tasks(&policy.agent.actor))
 }
 
 /// Reads a checkpoint written while its last task was still training (see
@@ -168,8 +171,9 @@ pub fn load_policy_or_checkpoint(dir: &Path) -> anyhow::Result<PolicyOrCheckpoin
 }
 
 /// What `quadcl eval` and `quadcl gait` run on `task`: a policy that learned `task` recalls
-/// it; any other policy (or one that names `task` but has not learned it yet) (a base policy run on a perturbation) uses its last task; a checkpoint
-/// still training uses its task, ended in memory ([`load_policy_or_checkpoint`]).
+/// it; any other policy (a base policy run on a perturbation, or a sequence's checkpoint
+/// from before `task`) uses its last learned task; a checkpoint still training uses its
+/// task, ended in memory ([`load_policy_or_checkpoint`]).
 pub fn load_for_task(dir: &Path, task: &str) -> anyhow::Result<LoadedPolicy> {
     let loaded = load_policy_or_checkpoint(dir)?;
     let learned = learned_task_names(&loaded.policy);
