@@ -35,6 +35,13 @@ fn metric_rows(dir: &std::path::Path) -> Vec<serde_json::Value> {
     text.lines().map(|l| serde_json::from_str(l).unwrap()).collect()
 }
 
+/// Resumes the run in `dir` with `cfg` and trains it to `cfg.ppo.iterations`.
+fn resume(cfg: &Config, dir: &std::path::Path) -> quadcl::rl::TrainSummary {
+    let (agent, state) = load_resume_point(cfg, "none", dir).unwrap();
+    let mut env = ToyEnv::new(16, 10, resume_seed(cfg.seed, state.iteration));
+    train_from(cfg, "none", &mut env, dir, false, Some((agent, state))).unwrap()
+}
+
 #[test]
 fn a_resumed_run_goes_on_from_its_last_checkpoint() {
     let dir = tempfile::tempdir().unwrap();
@@ -103,9 +110,7 @@ fn ending_a_task_at_its_checkpoint_drops_later_rows_and_keeps_the_time_splits() 
     std::fs::write(&path, text).unwrap();
     assert_eq!(metric_rows(dir.path()).len(), 5);
 
-    let (agent, state) = load_resume_point(&cfg, "none", dir.path()).unwrap();
-    let mut env = ToyEnv::new(16, 10, resume_seed(cfg.seed, state.iteration));
-    let summary = train_from(&cfg, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
+    let summary = resume(&cfg, dir.path());
     assert_eq!(metric_rows(dir.path()), rows, "the row past the checkpoint is dropped");
     let sum = |key: &str| rows.iter().map(|r| r[key].as_f64().unwrap()).sum::<f64>();
     assert_eq!(summary.update_s, sum("time/update_s"));
@@ -131,9 +136,7 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
     let err = format!("{:#}", load_resume_point(&wider, "none", dir.path()).unwrap_err());
     assert!(err.contains("another configuration"), "{err}");
 
-    let (agent, state) = load_resume_point(&shared, "none", dir.path()).unwrap();
-    let mut env = ToyEnv::new(16, 10, resume_seed(shared.seed, state.iteration));
-    train_from(&shared, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
+    resume(&shared, dir.path());
     let ended = load_policy(&dir.path().join("policy"), None).unwrap();
 
     let private = |p: &quadcl::rl::policy_dir::LoadedPolicy| -> usize {
