@@ -69,7 +69,12 @@ impl Observer for LogObserver {
 /// The echo line of iteration `iteration` (1-based) of `iterations`:
 /// `step 0 iteration 25/500: return 3.21 lin_vel_err 0.41 ang_vel_err 0.62 fall_rate 0.20 SPS 3300`
 /// (`-` for a figure the iteration did not report, e.g. before any episode ended).
-fn iteration_line(step: usize, iteration: usize, iterations: usize, metrics: &crate::engine::learner::Metrics) -> String {
+fn iteration_line(
+    step: usize,
+    iteration: usize,
+    iterations: usize,
+    metrics: &crate::engine::learner::Metrics,
+) -> String {
     let mut line = format!("step {step} iteration {iteration}/{iterations}:");
     for (label, key, digits) in [
         ("return", "charts/episodic_return", 2),
@@ -126,11 +131,21 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
     let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
     let dir = RunDir::new(out);
     let previous = if resume {
-        let stored = RunConfig::load(&out.join(RUN_FILE)).with_context(|| format!("--resume: {} holds no readable run", out.display()))?;
-        anyhow::ensure!(stored == cfg, "--resume: {} differs from the run in {} (its {RUN_FILE}); start a new --out instead", config.display(), out.display());
+        let stored = RunConfig::load(&out.join(RUN_FILE))
+            .with_context(|| format!("--resume: {} holds no readable run", out.display()))?;
+        anyhow::ensure!(
+            stored == cfg,
+            "--resume: {} differs from the run in {} (its {RUN_FILE}); start a new --out instead",
+            config.display(),
+            out.display()
+        );
         Some(MetricsFile::load(&dir.metrics_path())?)
     } else {
-        anyhow::ensure!(!dir.has_run(), "{} already holds a run: use --resume to continue it, or another --out", out.display());
+        anyhow::ensure!(
+            !dir.has_run(),
+            "{} already holds a run: use --resume to continue it, or another --out",
+            out.display()
+        );
         None
     };
     let reference = match &cfg.run.reference {
@@ -140,8 +155,15 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
     let reference_curve = |name: &str| reference.as_ref().and_then(|r| r.reference_curve(name));
     let (learner, learned) = make_learner(&cfg)?;
     let method = crate::cl::method::method_by_name(&cfg.method)?;
-    let mut session = Session::new(learner, method, cfg.sequence.clone(), cfg.config.net.mask.clone(), cfg.switches.clone(), cfg.config.seed)?
-        .with_learned_tasks(&learned)?;
+    let mut session = Session::new(
+        learner,
+        method,
+        cfg.sequence.clone(),
+        cfg.config.net.mask.clone(),
+        cfg.switches.clone(),
+        cfg.config.seed,
+    )?
+    .with_learned_tasks(&learned)?;
     let total_steps = cfg.sequence.tasks.len();
     if let Some(prev) = &previous {
         let done = prev.completed_steps;
@@ -179,7 +201,8 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
                     // Only after metrics.json names the new checkpoint as the last one.
                     let previous = dir.checkpoint(step - 1, &session.results().steps[step - 1].name);
                     if previous.exists() {
-                        std::fs::remove_dir_all(&previous).with_context(|| format!("removing {}", previous.display()))?;
+                        std::fs::remove_dir_all(&previous)
+                            .with_context(|| format!("removing {}", previous.display()))?;
                     }
                 }
                 dir.write_log(&lines.lock().map(|l| l.clone()).unwrap_or_default())?;
@@ -197,7 +220,8 @@ mod tests {
 
     #[test]
     fn the_iteration_line_shows_missing_figures_as_a_dash() {
-        let metrics = [("charts/episodic_return".to_string(), 3.214), ("charts/SPS".to_string(), 3301.7)].into_iter().collect();
+        let metrics =
+            [("charts/episodic_return".to_string(), 3.214), ("charts/SPS".to_string(), 3301.7)].into_iter().collect();
         assert_eq!(
             iteration_line(1, 25, 500, &metrics),
             "step 1 iteration 25/500: return 3.21 lin_vel_err - ang_vel_err - fall_rate - SPS 3302"

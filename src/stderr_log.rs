@@ -93,7 +93,10 @@ mod tests {
             quadcl::sim::RobotModel::from_urdf_str(&text, std::path::Path::new("robot.urdf")).unwrap();
         });
         let printed = String::from_utf8(buf.0.lock().unwrap().clone()).unwrap();
-        assert!(printed.starts_with("warning: robot.urdf: link 'trunk'") && printed.contains("missing.dae"), "{printed}");
+        assert!(
+            printed.starts_with("warning: robot.urdf: link 'trunk'") && printed.contains("missing.dae"),
+            "{printed}"
+        );
         assert!(!printed.contains("not shown"), "{printed}");
     }
 }

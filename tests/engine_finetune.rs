@@ -15,7 +15,13 @@ fn finetuning_one_task_leaves_every_other_task_bit_identical() {
     let out = tmp.path().join("smoke");
     run(&smoke, &out, RunOptions::default()).unwrap();
     let policy = out.join("checkpoints/step-02-noise_FR");
-    let shift = Shift { friction: Some([0.3, 0.5]), added_mass: Some([1.0, 2.0]), motor_strength: Some([0.8, 0.9]), latency_s: 0.04, iterations: 2 };
+    let shift = Shift {
+        friction: Some([0.3, 0.5]),
+        added_mass: Some([1.0, 2.0]),
+        motor_strength: Some([0.8, 0.9]),
+        latency_s: 0.04,
+        iterations: 2,
+    };
     let new = tmp.path().join("tuned");
     let r = finetune(&policy, "invert:RR", &shift, &new, 5, 4, false).unwrap();
     assert_eq!(r.before.len(), 3);

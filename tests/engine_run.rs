@@ -31,9 +31,20 @@ fn a_run_writes_every_metrics_field_checkpoints_and_a_log() {
     let out = tmp.path().join("out");
     let m = run(&cfg, &out, opts(false, None)).unwrap();
     assert_eq!((m.completed_steps, m.total_steps), (3, 3));
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
     for key in [
-        "method", "tasks", "eval_matrix", "average_performance", "forgetting", "forward_transfer", "plasticity", "curves", "command_tracking", "steps", "evaluations",
+        "method",
+        "tasks",
+        "eval_matrix",
+        "average_performance",
+        "forgetting",
+        "forward_transfer",
+        "plasticity",
+        "curves",
+        "command_tracking",
+        "steps",
+        "evaluations",
     ] {
         assert!(json.get(key).is_some(), "metrics.json has no {key}");
     }
@@ -126,7 +137,11 @@ fn a_bad_run_file_writes_nothing() {
 fn keeping_only_the_last_checkpoint_still_resumes_identically() {
     let tmp = tempfile::tempdir().unwrap();
     let whole = run(&write_run(tmp.path(), RUN), &tmp.path().join("whole"), opts(false, None)).unwrap();
-    let cfg = write_named(tmp.path(), "last.toml", &RUN.replace("learner = \"toy\"", "learner = \"toy\"\nkeep_last_checkpoint_only = true"));
+    let cfg = write_named(
+        tmp.path(),
+        "last.toml",
+        &RUN.replace("learner = \"toy\"", "learner = \"toy\"\nkeep_last_checkpoint_only = true"),
+    );
     let out = tmp.path().join("out");
     run(&cfg, &out, opts(false, Some(2))).unwrap();
     let kept: Vec<_> = std::fs::read_dir(out.join("checkpoints")).unwrap().map(|e| e.unwrap().file_name()).collect();

@@ -17,8 +17,10 @@ fn the_default_sequence_has_every_single_leg_task_once() {
     assert_eq!(names.len(), 12);
     assert_eq!(cfg.sequence.tasks.len(), 12);
     names.sort();
-    let mut expected: Vec<String> =
-        ["crash", "invert", "noise"].iter().flat_map(|k| ["FL", "FR", "RL", "RR"].map(|l| format!("{k}:{l}"))).collect();
+    let mut expected: Vec<String> = ["crash", "invert", "noise"]
+        .iter()
+        .flat_map(|k| ["FL", "FR", "RL", "RR"].map(|l| format!("{k}:{l}")))
+        .collect();
     expected.sort();
     assert_eq!(names, expected);
     let four = scene("sequence-a1-4.toml");
@@ -30,7 +32,11 @@ fn the_default_sequence_has_every_single_leg_task_once() {
 #[test]
 fn the_figure_11_runs_differ_only_in_the_mixed_tasks_initialisation() {
     let related = scene("fig11-related.toml");
-    for (file, init) in [("fig11-related.toml", TransferInit::Related), ("fig11-random.toml", TransferInit::Random), ("fig11-scratch.toml", TransferInit::Scratch)] {
+    for (file, init) in [
+        ("fig11-related.toml", TransferInit::Related),
+        ("fig11-random.toml", TransferInit::Random),
+        ("fig11-scratch.toml", TransferInit::Scratch),
+    ] {
         let cfg = scene(file);
         let last = cfg.sequence.tasks.last().unwrap();
         assert_eq!(last.name, "invert:RR+noise:FR");

@@ -15,10 +15,12 @@ fn sequence(text: &str) -> Sequence {
 fn session(seq: &str) -> Session {
     let mask = MaskConfig { entropy_iterations: 2, ..MaskConfig::default() };
     let learner = ToyLearner::new(&mask, 7).unwrap();
-    Session::new(Box::new(learner), Box::new(Ours), sequence(seq), mask.clone(), Switches::from_mask_config(&mask), 7).unwrap()
+    Session::new(Box::new(learner), Box::new(Ours), sequence(seq), mask.clone(), Switches::from_mask_config(&mask), 7)
+        .unwrap()
 }
 
-const THREE: &str = "iterations = 4\n[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n[[task]]\nname = \"noise:FR\"\n";
+const THREE: &str =
+    "iterations = 4\n[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n[[task]]\nname = \"noise:FR\"\n";
 
 #[test]
 fn pause_inside_a_task_stops_iterations_until_resume() {
@@ -55,14 +57,22 @@ fn switch_changes_apply_to_the_next_task_only() {
     let log = EventLog::default();
     s.add_observer(Box::new(log.clone()));
     s.step_iteration().unwrap(); // task 0 in progress
-    let change = SwitchOverrides { reinit: Some(false), lambda: Some(LambdaMode::Free), capacity: Some(0.3), ..Default::default() };
+    let change = SwitchOverrides {
+        reinit: Some(false),
+        lambda: Some(LambdaMode::Free),
+        capacity: Some(0.3),
+        ..Default::default()
+    };
     s.set_next_switches(change).unwrap();
     assert_eq!(s.next_switches().unwrap().capacity, 0.3);
     s.run(&mut |_| Ok(())).unwrap();
     let steps = &s.results().steps;
     let default = Switches::from_mask_config(&MaskConfig::default());
     assert_eq!(steps[0].switches, default, "the task in progress kept its switches");
-    assert_eq!(steps[1].switches, Switches { reinit: false, lambda: LambdaMode::Free, capacity: 0.3, ..default.clone() });
+    assert_eq!(
+        steps[1].switches,
+        Switches { reinit: false, lambda: LambdaMode::Free, capacity: 0.3, ..default.clone() }
+    );
     assert_eq!(steps[2].switches, default, "the change was for one task");
     let started: Vec<f64> = log
         .snapshot()

@@ -18,8 +18,19 @@ fn smoke_run_forgets_nothing_and_recalls_every_task_bit_for_bit() {
     let m = run(&smoke(), &out, RunOptions::default()).unwrap();
     assert_eq!(m.completed_steps, 3);
     assert_eq!(m.forgetting, Some(0.0));
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
-    for key in ["method", "tasks", "eval_matrix", "average_performance", "forgetting", "forward_transfer", "plasticity", "curves", "command_tracking"] {
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    for key in [
+        "method",
+        "tasks",
+        "eval_matrix",
+        "average_performance",
+        "forgetting",
+        "forward_transfer",
+        "plasticity",
+        "curves",
+        "command_tracking",
+    ] {
         assert!(json.get(key).is_some(), "metrics.json has no {key}");
     }
     for (j, name) in m.tasks.iter().enumerate().take(2) {
@@ -57,17 +68,26 @@ fn a_sequence_starts_from_a_base_policy_and_keeps_its_task() {
     let mut base_cfg = smoke_cfg.config.clone();
     base_cfg.ppo.iterations = 2;
     let base = tmp.path().join("base");
-    let mut env = quadcl::rl::sim_env::SimTrainEnv::new(&base_cfg.env, &quadcl::sim::Perturbation::none(), base_cfg.ppo.num_envs, 1).unwrap();
+    let mut env = quadcl::rl::sim_env::SimTrainEnv::new(
+        &base_cfg.env,
+        &quadcl::sim::Perturbation::none(),
+        base_cfg.ppo.num_envs,
+        1,
+    )
+    .unwrap();
     quadcl::rl::train(&base_cfg, "none", &mut env, &base, false).unwrap();
 
-    let text = std::fs::read_to_string(smoke()).unwrap().replace("[method]", &format!("[run]\nbase_policy = {:?}\n\n[method]", base.join("policy")));
+    let text = std::fs::read_to_string(smoke())
+        .unwrap()
+        .replace("[method]", &format!("[run]\nbase_policy = {:?}\n\n[method]", base.join("policy")));
     let run_file = tmp.path().join("from-base.toml");
     std::fs::write(&run_file, text).unwrap();
     let m = run(&run_file, &tmp.path().join("out"), RunOptions { stop_after: Some(2), ..Default::default() }).unwrap();
     assert_eq!(m.tasks[0], "none");
     assert_eq!(m.tasks.len(), 4);
     assert_eq!(m.steps[0].task, 1, "the sequence's first task gets the next id");
-    let base_evals: Vec<_> = m.evaluations.iter().map(|row| row.iter().find(|e| e.task == "none").unwrap().clone()).collect();
+    let base_evals: Vec<_> =
+        m.evaluations.iter().map(|row| row.iter().find(|e| e.task == "none").unwrap().clone()).collect();
     assert_eq!(base_evals.len(), 2);
     assert_eq!(base_evals[0], base_evals[1], "the base task is recalled bit for bit");
 }

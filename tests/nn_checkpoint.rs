@@ -21,7 +21,8 @@ fn trained_policy(dir: &Path) -> quadcl::nn::MaskedMlp {
     }
     // Leave task 2 in progress.
     net.begin_task(2, &[0]).unwrap();
-    let extras = BTreeMap::from([("action_std.0".to_string(), Tensor::from_vec(vec![0.5f32; OUT], OUT, &Device::Cpu).unwrap())]);
+    let extras =
+        BTreeMap::from([("action_std.0".to_string(), Tensor::from_vec(vec![0.5f32; OUT], OUT, &Device::Cpu).unwrap())]);
     let names = vec!["none".to_string(), "crash:FL".to_string(), "invert:RR".to_string()];
     save_policy(dir, &names, &[&net], &extras, &serde_json::json!({"seed": 11})).unwrap();
     net
@@ -147,7 +148,9 @@ fn saving_a_task_without_a_name_is_an_error_not_a_policy_that_cannot_load() {
     let mut net = small_mlp(&MaskConfig::default(), 3);
     net.begin_task(1, &[]).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let err = save_policy(dir.path(), &["none".into()], &[&net], &BTreeMap::new(), &serde_json::Value::Null).unwrap_err().to_string();
+    let err = save_policy(dir.path(), &["none".into()], &[&net], &BTreeMap::new(), &serde_json::Value::Null)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("task 1") && err.contains("no name"), "{err}");
 }
 
@@ -176,7 +179,10 @@ fn log_sigma_round_trips_exactly_and_files_with_the_older_sigma_tensor_still_loa
             None => owned.push((name.clone(), t.dtype(), t.shape().to_vec(), t.data().to_vec())),
         }
     }
-    let views: Vec<_> = owned.iter().map(|(n, d, s, b)| (n.clone(), safetensors::tensor::TensorView::new(*d, s.clone(), b).unwrap())).collect();
+    let views: Vec<_> = owned
+        .iter()
+        .map(|(n, d, s, b)| (n.clone(), safetensors::tensor::TensorView::new(*d, s.clone(), b).unwrap()))
+        .collect();
     let legacy = safetensors::serialize(views, None).unwrap();
     std::fs::write(&path, &legacy).unwrap();
     let (old_hash, new_hash) = (quadcl::util::sha256_hex(&bytes), quadcl::util::sha256_hex(&legacy));
@@ -189,10 +195,16 @@ fn log_sigma_round_trips_exactly_and_files_with_the_older_sigma_tensor_still_loa
         assert!((got / want - 1.0).abs() < 1e-5, "{}: sigma {got} loaded from the older file, saved {want}", a.name());
     }
     // Without either tensor the error names the new one.
-    let views: Vec<_> = owned.iter().filter(|(n, ..)| !n.ends_with(".sigma")).map(|(n, d, s, b)| (n.clone(), safetensors::tensor::TensorView::new(*d, s.clone(), b).unwrap())).collect();
+    let views: Vec<_> = owned
+        .iter()
+        .filter(|(n, ..)| !n.ends_with(".sigma"))
+        .map(|(n, d, s, b)| (n.clone(), safetensors::tensor::TensorView::new(*d, s.clone(), b).unwrap()))
+        .collect();
     let missing = safetensors::serialize(views, None).unwrap();
     std::fs::write(&path, &missing).unwrap();
-    edit_manifest(dir.path(), |m| m["files"][MODEL_FILE] = serde_json::Value::String(quadcl::util::sha256_hex(&missing)));
+    edit_manifest(dir.path(), |m| {
+        m["files"][MODEL_FILE] = serde_json::Value::String(quadcl::util::sha256_hex(&missing))
+    });
     let err = load_error(dir.path());
     assert!(err.contains("missing tensor net.l0.log_sigma"), "{err}");
 }

@@ -62,7 +62,8 @@ fn scores_get_the_straight_through_gradient_even_where_unselected() {
     let grads = loss_of(&net, &mut rng).backward().unwrap();
     let grad = |name: &str| flat(grads.get(params.iter().find(|p| p.name == name).unwrap().var.as_tensor()).unwrap());
     let l = &net.layers()[1];
-    let (gw, gs, w, m) = (grad("net.l1.weight"), grad("net.l1.score"), l.weight_values().unwrap(), flat(l.iteration_mask().unwrap()));
+    let (gw, gs, w, m) =
+        (grad("net.l1.weight"), grad("net.l1.score"), l.weight_values().unwrap(), flat(l.iteration_mask().unwrap()));
     let cols = l.shape().1;
     let (mut live_rows, mut unselected_in_live_rows) = (0, 0);
     for row in 0..l.shape().0 {
@@ -74,7 +75,12 @@ fn scores_get_the_straight_through_gradient_even_where_unselected() {
         for i in elements {
             if m[i] == 1.0 {
                 // dL/dmu = dL/dWeff * W and dL/dW = dL/dWeff * M = dL/dWeff where selected.
-                assert!((gs[i] - gw[i] * w[i]).abs() <= 1e-6 * (1.0 + gs[i].abs()), "element {i}: {} vs {}", gs[i], gw[i] * w[i]);
+                assert!(
+                    (gs[i] - gw[i] * w[i]).abs() <= 1e-6 * (1.0 + gs[i].abs()),
+                    "element {i}: {} vs {}",
+                    gs[i],
+                    gw[i] * w[i]
+                );
             } else {
                 assert_eq!(gw[i], 0.0, "unselected weight {i} has a gradient");
                 if live {
@@ -113,7 +119,11 @@ fn entropy_term_widens_sigma_then_sigma_decays_to_its_floor() {
     assert!((sigmas[25] / sigmas[24] - 0.99).abs() < 1e-4, "no 0.99 decay after E");
     // The floor is applied to ln sigma, so exp(ln floor) matches the floor to f32 rounding only.
     let last = *sigmas.last().unwrap();
-    assert!((last / cfg.sigma_floor as f32 - 1.0).abs() < 1e-5, "sigma ends at {last}, not its floor {}", cfg.sigma_floor);
+    assert!(
+        (last / cfg.sigma_floor as f32 - 1.0).abs() < 1e-5,
+        "sigma ends at {last}, not its floor {}",
+        cfg.sigma_floor
+    );
 }
 
 /// The bug: sigma was a raw variable, only clamped to [floor, max] once per iteration, and
@@ -150,7 +160,11 @@ fn soft_score_sigma_stays_positive_and_finite_under_many_adam_steps() {
             opt.step(&params, &grads).unwrap();
             for (l, s0) in net.layers().iter().zip(&start) {
                 let sigma = l.sigma().unwrap();
-                assert!(sigma.is_finite() && sigma > 0.0, "{}: sigma = {sigma} at iteration {it}, step {step}", l.name());
+                assert!(
+                    sigma.is_finite() && sigma > 0.0,
+                    "{}: sigma = {sigma} at iteration {it}, step {step}",
+                    l.name()
+                );
                 lowest = lowest.min(sigma / s0);
             }
         }
@@ -180,7 +194,10 @@ fn forward_transfer_bonus_favours_related_tasks_elements() {
     };
     let (with, without) = (share_of_task0(&[0]), share_of_task0(&[]));
     // Measured: 0.99 with the bonus, 0.87 without (task 1 already reused much of task 0).
-    assert!(with > 0.97 && with > without + 0.05, "share of reused elements from related task 0: {with:.3} with bonus, {without:.3} without");
+    assert!(
+        with > 0.97 && with > without + 0.05,
+        "share of reused elements from related task 0: {with:.3} with bonus, {without:.3} without"
+    );
 }
 
 #[test]
@@ -203,7 +220,11 @@ fn fine_tuning_a_finished_task_moves_only_its_private_elements() {
         let after = l.weight_values().unwrap();
         let moved: Vec<usize> = (0..after.len()).filter(|&i| after[i].to_bits() != before[i].to_bits()).collect();
         assert!(!moved.is_empty(), "{}: nothing moved", l.name());
-        assert!(moved.iter().all(|&i| states[i] == ElementState::Private(0)), "{}: a non-private element moved", l.name());
+        assert!(
+            moved.iter().all(|&i| states[i] == ElementState::Private(0)),
+            "{}: a non-private element moved",
+            l.name()
+        );
     }
 }
 
@@ -260,7 +281,13 @@ fn mask_churn_counts_the_selected_share_that_the_previous_draw_did_not_select() 
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     // sigma far below the spread of mu: the draw is nearly the ranking of mu; only
     // elements within about sigma of a row's k-th score can swap.
-    let still = MaskConfig { score_init_std: 1.0, sigma_init: 1e-3, sigma_floor: 1e-3, entropy: false, ..MaskConfig::default() };
+    let still = MaskConfig {
+        score_init_std: 1.0,
+        sigma_init: 1e-3,
+        sigma_floor: 1e-3,
+        entropy: false,
+        ..MaskConfig::default()
+    };
     let mut net = small_mlp(&still, 5);
     net.begin_task(0, &[]).unwrap();
     net.begin_iteration(0, &mut rng).unwrap();
@@ -270,7 +297,8 @@ fn mask_churn_counts_the_selected_share_that_the_previous_draw_did_not_select() 
     assert!(churn < 0.01, "a still mask churned {churn}");
 
     // sigma far above the spread of mu: every draw is a fresh random top-k, so about 1 - c of it is new.
-    let noisy = MaskConfig { score_init_std: 1e-3, sigma_init: 0.05, sigma_max: 0.05, entropy: false, ..MaskConfig::default() };
+    let noisy =
+        MaskConfig { score_init_std: 1e-3, sigma_init: 0.05, sigma_max: 0.05, entropy: false, ..MaskConfig::default() };
     let mut net = small_mlp(&noisy, 5);
     net.begin_task(0, &[]).unwrap();
     net.begin_iteration(0, &mut rng).unwrap();
@@ -325,9 +353,17 @@ fn a_task_that_takes_all_of_a_related_task_starts_as_it_when_fresh_weights_start
         let (mut net, mut rng) = net_after(1, &cfg);
         for l in net.layers() {
             let w = l.weight_values().unwrap();
-            let (bound, _) = w.iter().zip(l.states()).filter(|(_, s)| **s == ElementState::Vacant).fold((0.0f32, 0), |(m, n), (w, _)| (m.max(w.abs()), n + 1));
+            let (bound, _) = w
+                .iter()
+                .zip(l.states())
+                .filter(|(_, s)| **s == ElementState::Vacant)
+                .fold((0.0f32, 0), |(m, n), (w, _)| (m.max(w.abs()), n + 1));
             let full = (6.0 / (0.2 * l.shape().1 as f32)).sqrt();
-            assert!(bound <= reinit_scale as f32 * full + 1e-6, "{}: vacant |w| up to {bound}, range {full} x {reinit_scale}", l.name());
+            assert!(
+                bound <= reinit_scale as f32 * full + 1e-6,
+                "{}: vacant |w| up to {bound}, range {full} x {reinit_scale}",
+                l.name()
+            );
         }
         net.set_mask_config(&MaskConfig { capacity: 0.34, ..cfg }).unwrap();
         net.begin_task(1, &[0]).unwrap();
@@ -335,7 +371,11 @@ fn a_task_that_takes_all_of_a_related_task_starts_as_it_when_fresh_weights_start
         for l in net.layers() {
             let m = flat(l.iteration_mask().unwrap());
             let t0 = l.task_mask(0).unwrap();
-            assert!((0..m.len()).all(|i| !t0.get(i) || m[i] == 1.0), "{}: an element of task 0 is not selected", l.name());
+            assert!(
+                (0..m.len()).all(|i| !t0.get(i) || m[i] == 1.0),
+                "{}: an element of task 0 is not selected",
+                l.name()
+            );
         }
         let x = inputs(32, &mut rng);
         let now = flat(&net.forward(&x).unwrap());

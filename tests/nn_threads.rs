@@ -33,7 +33,11 @@ fn child_trains_and_prints_its_numbers() {
     net.end_task(&mut rng).unwrap();
     let out = bits(&net.forward_task(0, &x).unwrap());
     let weights: Vec<u32> = net.layers().iter().flat_map(|l| l.weight_values().unwrap()).map(f32::to_bits).collect();
-    println!("THREADS {} NUMBERS {}", candle_core::utils::get_num_threads(), quadcl::util::sha256_hex(&out.iter().chain(&weights).flat_map(|b| b.to_le_bytes()).collect::<Vec<u8>>()));
+    println!(
+        "THREADS {} NUMBERS {}",
+        candle_core::utils::get_num_threads(),
+        quadcl::util::sha256_hex(&out.iter().chain(&weights).flat_map(|b| b.to_le_bytes()).collect::<Vec<u8>>())
+    );
 }
 
 fn numbers_with_threads(threads: usize) -> String {
@@ -44,8 +48,15 @@ fn numbers_with_threads(threads: usize) -> String {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "child with {threads} threads failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    let line = stdout.lines().find_map(|l| l.split("THREADS ").nth(1)).unwrap_or_else(|| panic!("no numbers from the child:\n{stdout}"));
+    assert!(
+        out.status.success(),
+        "child with {threads} threads failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = stdout
+        .lines()
+        .find_map(|l| l.split("THREADS ").nth(1))
+        .unwrap_or_else(|| panic!("no numbers from the child:\n{stdout}"));
     let (used, numbers) = line.split_once(" NUMBERS ").unwrap();
     assert_eq!(used, threads.to_string(), "the child did not use {threads} threads");
     numbers.to_string()

@@ -75,7 +75,12 @@ fn eval_of_a_training_checkpoint_equals_the_policy_its_task_ends_with() {
     // the policy that training wrote after ending the task.
     let (_dir, out) = train_tiny();
     let eval = |policy: std::path::PathBuf| {
-        let output = quadcl().args(["eval", "--policy"]).arg(policy).args(["--episodes", "3", "--seed", "2", "--json"]).output().unwrap();
+        let output = quadcl()
+            .args(["eval", "--policy"])
+            .arg(policy)
+            .args(["--episodes", "3", "--seed", "2", "--json"])
+            .output()
+            .unwrap();
         assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
         serde_json::from_slice::<serde_json::Value>(&output.stdout).unwrap()
     };

@@ -3,9 +3,9 @@
 
 mod rl_common;
 use quadcl::config::Config;
-use rl_common::small_ppo_config;
 use quadcl::rl::toy_env::ToyEnv;
 use quadcl::rl::{Agent, PpoLearner, TrainEnv};
+use rl_common::small_ppo_config;
 
 fn run(cfg: &Config, iterations: usize, seed: u64) -> Vec<quadcl::rl::Metrics> {
     let mut env = ToyEnv::new(cfg.ppo.num_envs, 10, seed);
@@ -81,6 +81,7 @@ fn fresh_action_means_max(ppo: quadcl::config::PpoConfig) -> f32 {
 fn a_fresh_actor_starts_near_the_default_pose_not_at_a_random_offset() {
     let scaled = fresh_action_means_max(quadcl::config::PpoConfig::default());
     assert!(scaled < 0.1, "initial action means up to {scaled}: the policy would start folded over");
-    let plain = fresh_action_means_max(quadcl::config::PpoConfig { actor_output_init_scale: 1.0, ..Default::default() });
+    let plain =
+        fresh_action_means_max(quadcl::config::PpoConfig { actor_output_init_scale: 1.0, ..Default::default() });
     assert!(plain > 0.5, "without the scale the means reach {plain}; the test no longer shows what the scale is for");
 }

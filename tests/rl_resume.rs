@@ -90,7 +90,8 @@ fn resuming_with_another_config_or_task_is_an_error_that_changes_nothing() {
     assert!(err.contains("trainer.json"), "{err}");
     assert_eq!(std::fs::read(dir.path().join("checkpoint").join("model.safetensors")).unwrap(), snapshot);
 
-    let finished = format!("{:#}", quadcl::rl::policy_dir::load_training_checkpoint(&dir.path().join("policy")).unwrap_err());
+    let finished =
+        format!("{:#}", quadcl::rl::policy_dir::load_training_checkpoint(&dir.path().join("policy")).unwrap_err());
     assert!(finished.contains("not a checkpoint of a run in progress"), "{finished}");
 }
 
@@ -105,7 +106,9 @@ fn ending_a_task_at_its_checkpoint_drops_later_rows_and_keeps_the_time_splits() 
     let rows = metric_rows(dir.path());
     let path = dir.path().join("metrics.jsonl");
     let mut text = std::fs::read_to_string(&path).unwrap();
-    text.push_str(&serde_json::to_string(&rows[3]).unwrap().replace("\"charts/iteration\":4.0", "\"charts/iteration\":5.0"));
+    text.push_str(
+        &serde_json::to_string(&rows[3]).unwrap().replace("\"charts/iteration\":4.0", "\"charts/iteration\":5.0"),
+    );
     text.push('\n');
     std::fs::write(&path, text).unwrap();
     assert_eq!(metric_rows(dir.path()).len(), 5);
@@ -140,12 +143,20 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
     let ended = load_policy(&dir.path().join("policy"), None).unwrap();
 
     let private = |p: &quadcl::rl::policy_dir::LoadedPolicy| -> usize {
-        p.agent.networks().iter().flat_map(|n| n.layers()).map(|l| l.states().iter().filter(|s| matches!(s, ElementState::Private(_))).count()).sum()
+        p.agent
+            .networks()
+            .iter()
+            .flat_map(|n| n.layers())
+            .map(|l| l.states().iter().filter(|s| matches!(s, ElementState::Private(_))).count())
+            .sum()
     };
     assert!(private(&first) > 0, "the default p = 0.02 made some elements private");
     assert_eq!(private(&ended), 0);
-    let x = Tensor::ones((3, first.agent.actor.sizes()[0]), candle_core::DType::F32, &candle_core::Device::Cpu).unwrap();
-    let out = |p: &quadcl::rl::policy_dir::LoadedPolicy| p.agent.actor.forward_task(0, &x).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
+    let x =
+        Tensor::ones((3, first.agent.actor.sizes()[0]), candle_core::DType::F32, &candle_core::Device::Cpu).unwrap();
+    let out = |p: &quadcl::rl::policy_dir::LoadedPolicy| {
+        p.agent.actor.forward_task(0, &x).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap()
+    };
     assert_eq!(out(&first), out(&ended), "the task's recall is unchanged");
     for (a, b) in first.agent.networks().iter().zip(ended.agent.networks()) {
         for (la, lb) in a.layers().iter().zip(b.layers()) {

@@ -3,10 +3,10 @@
 
 mod rl_common;
 use quadcl::config::Config;
-use rl_common::small_ppo_config;
 use quadcl::rl::policy_dir::{load_policy, save_policy};
 use quadcl::rl::toy_env::ToyEnv;
 use quadcl::rl::{evaluate, train, Agent, TrainEnv};
+use rl_common::small_ppo_config;
 
 fn toy_config(iterations: usize) -> Config {
     let mut cfg = small_ppo_config();

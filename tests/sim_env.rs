@@ -113,7 +113,8 @@ fn noise_has_the_configured_std_on_exactly_the_named_leg() {
     let mut samples = Vec::new();
     for _ in 0..200 {
         env.step(&[0.1; ACT_DIM]).unwrap();
-        let offsets: Vec<f32> = env.targets().iter().zip(env.default_pose()).map(|(t, d)| (t - d) / cfg.action_scale).collect();
+        let offsets: Vec<f32> =
+            env.targets().iter().zip(env.default_pose()).map(|(t, d)| (t - d) / cfg.action_scale).collect();
         for leg in Leg::ALL {
             for &o in leg_offsets(&offsets, leg) {
                 if leg == Leg::RL {
@@ -339,7 +340,8 @@ fn config_values_that_would_panic_later_are_errors_naming_the_key() {
         ("added_mass", EnvConfig { added_mass_range: [-10.0, -10.0], ..EnvConfig::default() }),
     ];
     for (key, cfg) in cases {
-        let result = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).and_then(|mut env| env.step(&[0.0; ACT_DIM]));
+        let result =
+            LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).and_then(|mut env| env.step(&[0.0; ACT_DIM]));
         let err = format!("{:#}", result.err().unwrap_or_else(|| panic!("{key}: accepted")));
         assert!(err.contains(key), "{key}: {err}");
     }

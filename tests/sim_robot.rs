@@ -58,7 +58,8 @@ fn missing_joint_is_an_error_naming_the_file_and_the_leg() {
 
 #[test]
 fn bad_number_is_an_error_naming_the_file_and_the_value() {
-    let err = load_err("bad_number.urdf", &a1_text().replacen("<mass value=\"4.713\"/>", "<mass value=\"4.7x13\"/>", 1));
+    let err =
+        load_err("bad_number.urdf", &a1_text().replacen("<mass value=\"4.713\"/>", "<mass value=\"4.7x13\"/>", 1));
     assert!(err.contains("bad_number.urdf"), "{err}");
     assert!(err.contains("bad number") && err.contains("4.7x13") && err.contains("line 11"), "{err}");
 
@@ -81,7 +82,10 @@ fn a_tree_that_is_not_a_quadruped_is_an_error_naming_the_file() {
         text = format!("{}{}", &text[..start], &text[end..]);
     }
     let err = load_err("tripod.urdf", &text);
-    assert!(err.contains("tripod.urdf") && err.contains("not a quadruped tree") && err.contains("3 leg chains"), "{err}");
+    assert!(
+        err.contains("tripod.urdf") && err.contains("not a quadruped tree") && err.contains("3 leg chains"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -141,7 +145,10 @@ fn a_link_with_two_parent_joints_is_an_error_not_an_endless_walk() {
         1,
     );
     let err = load_err("loop.urdf", &text);
-    assert!(err.contains("loop.urdf") && err.contains("not a tree") && err.contains("FL_hip") && err.contains("FL_loop"), "{err}");
+    assert!(
+        err.contains("loop.urdf") && err.contains("not a tree") && err.contains("FL_hip") && err.contains("FL_loop"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -38,13 +38,22 @@ impl DenseMlp {
     fn new(rng: &mut ChaCha8Rng) -> anyhow::Result<Self> {
         let layers = SIZES
             .windows(2)
-            .map(|w| Ok((Var::from_tensor(&randn((w[1], w[0]), (1.0 / w[0] as f32).sqrt(), rng)?)?, Var::zeros(w[1], candle_core::DType::F32, &Device::Cpu)?)))
+            .map(|w| {
+                Ok((
+                    Var::from_tensor(&randn((w[1], w[0]), (1.0 / w[0] as f32).sqrt(), rng)?)?,
+                    Var::zeros(w[1], candle_core::DType::F32, &Device::Cpu)?,
+                ))
+            })
             .collect::<anyhow::Result<_>>()?;
         Ok(Self { layers })
     }
 
     fn forward(&self, x: &Tensor) -> anyhow::Result<Tensor> {
-        let parts: Vec<Tensor> = self.layers.iter().flat_map(|(w, b)| [w.as_tensor().flatten_all(), Ok(b.as_tensor().clone())]).collect::<candle_core::Result<_>>()?;
+        let parts: Vec<Tensor> = self
+            .layers
+            .iter()
+            .flat_map(|(w, b)| [w.as_tensor().flatten_all(), Ok(b.as_tensor().clone())])
+            .collect::<candle_core::Result<_>>()?;
         Ok(fused_mlp(&SIZES, Activation::Elu, x, &Tensor::cat(&parts, 0)?, true)?)
     }
 
@@ -53,14 +62,23 @@ impl DenseMlp {
             .iter()
             .enumerate()
             .flat_map(|(i, (w, b))| {
-                [Param { name: format!("l{i}.weight"), var: w.clone(), update_mask: None }, Param { name: format!("l{i}.bias"), var: b.clone(), update_mask: None }]
+                [
+                    Param { name: format!("l{i}.weight"), var: w.clone(), update_mask: None },
+                    Param { name: format!("l{i}.bias"), var: b.clone(), update_mask: None },
+                ]
             })
             .collect()
     }
 }
 
 /// Milliseconds of (forward, backward, optimiser) for one step.
-fn timed_step(forward: impl Fn(&Tensor) -> anyhow::Result<Tensor>, params: &[Param], opt: &mut MaskedAdam, x: &Tensor, y: &Tensor) -> anyhow::Result<[f64; 3]> {
+fn timed_step(
+    forward: impl Fn(&Tensor) -> anyhow::Result<Tensor>,
+    params: &[Param],
+    opt: &mut MaskedAdam,
+    x: &Tensor,
+    y: &Tensor,
+) -> anyhow::Result<[f64; 3]> {
     let t0 = Instant::now();
     let loss = forward(x)?.sub(y)?.sqr()?.mean_all()?;
     let t1 = Instant::now();
@@ -108,7 +126,8 @@ pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Va
     let dense = DenseMlp::new(&mut rng)?;
     let dense_params = dense.params();
     let mut opt = MaskedAdam::new(AdamConfig::default());
-    let ([_, _, _, dense_ms], dense_min) = measure_steps(seconds, || timed_step(|x| dense.forward(x), &dense_params, &mut opt, &x, &y))?;
+    let ([_, _, _, dense_ms], dense_min) =
+        measure_steps(seconds, || timed_step(|x| dense.forward(x), &dense_params, &mut opt, &x, &y))?;
 
     let mut masked = MaskedMlp::new("actor", &SIZES, Activation::Elu, &MaskConfig::default(), 0)?;
     masked.begin_task(0, &[])?;

@@ -205,9 +205,13 @@ mod tests {
 
     #[test]
     fn switches_round_trip_through_the_mask_config() {
-        let s = Switches { reinit: false, entropy: false, lambda: LambdaMode::Free, capacity: 0.3, private_share: 0.05 };
+        let s =
+            Switches { reinit: false, entropy: false, lambda: LambdaMode::Free, capacity: 0.3, private_share: 0.05 };
         let m = s.apply(&MaskConfig::default()).unwrap();
-        assert_eq!((m.reinit, m.entropy, m.rule, m.capacity, m.private_share), (false, false, SelectionRule::Free, 0.3, 0.05));
+        assert_eq!(
+            (m.reinit, m.entropy, m.rule, m.capacity, m.private_share),
+            (false, false, SelectionRule::Free, 0.3, 0.05)
+        );
         assert_eq!(Switches::from_mask_config(&m), s);
         assert_eq!(m.sigma_decay, MaskConfig::default().sigma_decay, "other settings are kept");
     }

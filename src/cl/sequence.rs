@@ -170,8 +170,10 @@ mod tests {
     fn a_related_task_must_come_earlier() {
         let err = format!(
             "{:#}",
-            parse("[[task]]\nname = \"invert:RR+noise:FR\"\nrelated = [\"invert:RR\"]\n[[task]]\nname = \"invert:RR\"\n")
-                .unwrap_err()
+            parse(
+                "[[task]]\nname = \"invert:RR+noise:FR\"\nrelated = [\"invert:RR\"]\n[[task]]\nname = \"invert:RR\"\n"
+            )
+            .unwrap_err()
         );
         assert!(err.contains("not trained earlier"), "{err}");
     }

@@ -13,7 +13,11 @@ pub struct BenchArgs {
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(args.seconds.is_finite() && args.seconds > 0.0, "--seconds must be a finite number > 0, got {}", args.seconds);
+    anyhow::ensure!(
+        args.seconds.is_finite() && args.seconds > 0.0,
+        "--seconds must be a finite number > 0, got {}",
+        args.seconds
+    );
     let mut report = serde_json::Map::new();
     crate::bench::env::measure(args.seconds, &mut report)?;
     crate::bench::nn::measure(args.seconds, &mut report)?;

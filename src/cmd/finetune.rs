@@ -38,7 +38,15 @@ pub fn run(args: FinetuneArgs) -> anyhow::Result<()> {
     if let Some(n) = args.iterations {
         shift.iterations = n;
     }
-    let r = crate::engine::finetune::finetune(&args.policy, &args.task, &shift, &args.out, args.seed, args.episodes, std::io::stderr().is_terminal())?;
+    let r = crate::engine::finetune::finetune(
+        &args.policy,
+        &args.task,
+        &shift,
+        &args.out,
+        args.seed,
+        args.episodes,
+        std::io::stderr().is_terminal(),
+    )?;
     let find = |v: &[crate::engine::Evaluation]| v.iter().find(|e| e.task == r.task).cloned();
     if let (Some(b), Some(a)) = (find(&r.before), find(&r.after)) {
         println!(
@@ -46,7 +54,15 @@ pub fn run(args: FinetuneArgs) -> anyhow::Result<()> {
             r.task, b.performance, a.performance, b.lin_vel_err, a.lin_vel_err, b.fall_rate, a.fall_rate
         );
     }
-    anyhow::ensure!(r.changed_other_tasks.is_empty(), "other tasks changed: {:?} (a bug: fine-tuning must not touch them)", r.changed_other_tasks);
-    println!("{} other tasks unchanged (bit-identical evaluations); new policy in {}", r.before.len() - 1, args.out.display());
+    anyhow::ensure!(
+        r.changed_other_tasks.is_empty(),
+        "other tasks changed: {:?} (a bug: fine-tuning must not touch them)",
+        r.changed_other_tasks
+    );
+    println!(
+        "{} other tasks unchanged (bit-identical evaluations); new policy in {}",
+        r.before.len() - 1,
+        args.out.display()
+    );
     Ok(())
 }

@@ -51,13 +51,20 @@ pub fn run(args: GaitArgs) -> anyhow::Result<()> {
 
 fn print_table(report: &GaitReport) {
     let r = &report.contacts;
-    let feet = |v: &[f32; 4], unit: &str| format!("FL {:.2}  FR {:.2}  RL {:.2}  RR {:.2}{unit}", v[0], v[1], v[2], v[3]);
+    let feet =
+        |v: &[f32; 4], unit: &str| format!("FL {:.2}  FR {:.2}  RL {:.2}  RR {:.2}{unit}", v[0], v[1], v[2], v[3]);
     println!("command        vx {:.2} m/s, wz {:.2} rad/s", report.command[0], report.command[2]);
     let fell = if report.fell { " (fell)" } else { "" };
-    println!("achieved       vx {:.2} m/s, wz {:.2} rad/s over {:.1} s{fell}", report.mean_vx, report.mean_wz, report.seconds);
+    println!(
+        "achieved       vx {:.2} m/s, wz {:.2} rad/s over {:.1} s{fell}",
+        report.mean_vx, report.mean_wz, report.seconds
+    );
     println!("duty factor    {}", feet(&r.duty_factor, ""));
     println!("touchdowns     {}", feet(&r.touchdowns_per_s, " per s"));
-    println!("same state     diagonal {:.2}, lateral {:.2}, fore-aft {:.2}", r.diagonal_agreement, r.lateral_agreement, r.fore_aft_agreement);
+    println!(
+        "same state     diagonal {:.2}, lateral {:.2}, fore-aft {:.2}",
+        r.diagonal_agreement, r.lateral_agreement, r.fore_aft_agreement
+    );
     println!("gait           {}", r.gait);
     println!("last 2 s       (# on the ground, . in the air; one character per 20 ms)");
     for line in &report.contact_strip {

@@ -25,7 +25,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let m = crate::headless::run(
         &args.config,
         &args.out,
-        crate::headless::RunOptions { resume: args.resume, progress: std::io::stderr().is_terminal(), stop_after: args.stop_after },
+        crate::headless::RunOptions {
+            resume: args.resume,
+            progress: std::io::stderr().is_terminal(),
+            stop_after: args.stop_after,
+        },
     )?;
     let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
     println!(

@@ -42,7 +42,8 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     }
     let task: Perturbation = args.task.parse()?;
     let task_name = task.to_string();
-    let resume = if args.resume { Some(crate::rl::trainer::load_resume_point(&config, &task_name, &args.out)?) } else { None };
+    let resume =
+        if args.resume { Some(crate::rl::trainer::load_resume_point(&config, &task_name, &args.out)?) } else { None };
     let env_seed = match &resume {
         Some((_, state)) => crate::rl::trainer::resume_seed(config.seed, state.iteration),
         None => config.seed,

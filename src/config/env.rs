@@ -180,7 +180,11 @@ impl EnvConfig {
 
     /// Checks the values that would make the simulation meaningless.
     pub fn validate(&self) -> anyhow::Result<()> {
-        anyhow::ensure!(self.physics_dt > 0.0 && self.physics_dt.is_finite(), "env.physics_dt must be > 0, got {}", self.physics_dt);
+        anyhow::ensure!(
+            self.physics_dt > 0.0 && self.physics_dt.is_finite(),
+            "env.physics_dt must be > 0, got {}",
+            self.physics_dt
+        );
         anyhow::ensure!(self.decimation >= 1, "env.decimation must be >= 1, got {}", self.decimation);
         anyhow::ensure!(self.solver_iterations >= 1, "env.solver_iterations must be >= 1");
         anyhow::ensure!(self.episode_s > 0.0, "env.episode_s must be > 0, got {}", self.episode_s);
@@ -192,14 +196,27 @@ impl EnvConfig {
             ("added_mass_range", self.added_mass_range),
             ("motor_strength_range", self.motor_strength_range),
         ] {
-            anyhow::ensure!(r[0] <= r[1] && r[0].is_finite() && r[1].is_finite(), "env.{name} must be finite [low, high] with low <= high, got {r:?}");
+            anyhow::ensure!(
+                r[0] <= r[1] && r[0].is_finite() && r[1].is_finite(),
+                "env.{name} must be finite [low, high] with low <= high, got {r:?}"
+            );
         }
-        anyhow::ensure!(self.noise_std >= 0.0 && self.noise_std.is_finite(), "env.noise_std must be finite and >= 0, got {}", self.noise_std);
-        for (name, v) in [("kp", self.kp), ("kd", self.kd), ("action_scale", self.action_scale), ("clip_actions", self.clip_actions)] {
+        anyhow::ensure!(
+            self.noise_std >= 0.0 && self.noise_std.is_finite(),
+            "env.noise_std must be finite and >= 0, got {}",
+            self.noise_std
+        );
+        for (name, v) in
+            [("kp", self.kp), ("kd", self.kd), ("action_scale", self.action_scale), ("clip_actions", self.clip_actions)]
+        {
             anyhow::ensure!(v.is_finite() && v >= 0.0, "env.{name} must be finite and >= 0, got {v}");
         }
         anyhow::ensure!(self.kp > 0.0, "env.kp must be > 0 (the PD spring), got {}", self.kp);
-        anyhow::ensure!(self.start_height.is_finite() && self.start_height > 0.0, "env.start_height must be > 0, got {}", self.start_height);
+        anyhow::ensure!(
+            self.start_height.is_finite() && self.start_height > 0.0,
+            "env.start_height must be > 0, got {}",
+            self.start_height
+        );
         for (name, v) in [
             ("push_interval_s", self.push_interval_s),
             ("push_max_vel", self.push_max_vel),
@@ -208,7 +225,11 @@ impl EnvConfig {
         ] {
             anyhow::ensure!(v.is_finite() && v >= 0.0, "env.{name} must be finite and >= 0, got {v}");
         }
-        anyhow::ensure!(self.tracking_sigma.is_finite() && self.tracking_sigma > 0.0, "env.tracking_sigma must be > 0, got {}", self.tracking_sigma);
+        anyhow::ensure!(
+            self.tracking_sigma.is_finite() && self.tracking_sigma > 0.0,
+            "env.tracking_sigma must be > 0, got {}",
+            self.tracking_sigma
+        );
         for (name, v) in [
             ("max_tilt_rad", self.max_tilt_rad),
             ("height_target", self.height_target),

@@ -42,8 +42,7 @@ impl Config {
     /// Reads a TOML file. Errors name the file and, from the TOML parser,
     /// the line, column and key that is wrong.
     pub fn load(path: &Path) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("reading config {}", path.display()))?;
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading config {}", path.display()))?;
         Self::from_toml_str(&text).with_context(|| format!("in config {}", path.display()))
     }
 

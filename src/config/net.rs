@@ -108,7 +108,12 @@ impl MaskConfig {
     /// `reinit_scale`): the ones that act only when a task ends (METHOD.md 2.4), so
     /// they may change while a task is in progress.
     pub fn with_end_of_task(&self, other: &MaskConfig) -> MaskConfig {
-        MaskConfig { private_share: other.private_share, reinit: other.reinit, reinit_scale: other.reinit_scale, ..self.clone() }
+        MaskConfig {
+            private_share: other.private_share,
+            reinit: other.reinit,
+            reinit_scale: other.reinit_scale,
+            ..self.clone()
+        }
     }
 
     /// Checks the ranges of every field; the error names the key and the expected range.
@@ -123,11 +128,30 @@ impl MaskConfig {
         in_unit("sigma_decay", self.sigma_decay)?;
         in_unit("reinit_scale", self.reinit_scale)?;
         anyhow::ensure!(self.score_init_std > 0.0, "net.mask.score_init_std must be > 0");
-        anyhow::ensure!(self.sigma_init >= 0.0 && self.sigma_floor >= 0.0, "net.mask.sigma_init and sigma_floor must be >= 0");
-        anyhow::ensure!(self.sigma_max >= self.sigma_floor, "net.mask.sigma_max ({}) must be >= sigma_floor ({})", self.sigma_max, self.sigma_floor);
-        anyhow::ensure!(self.entropy_weight.is_finite() && self.entropy_weight >= 0.0, "net.mask.entropy_weight = {}: expected a finite value >= 0", self.entropy_weight);
-        anyhow::ensure!(self.transfer_bonus.is_finite(), "net.mask.transfer_bonus = {}: expected a finite value", self.transfer_bonus);
-        anyhow::ensure!(self.score_init_std.is_finite() && self.sigma_max.is_finite(), "net.mask.score_init_std and sigma_max must be finite");
+        anyhow::ensure!(
+            self.sigma_init >= 0.0 && self.sigma_floor >= 0.0,
+            "net.mask.sigma_init and sigma_floor must be >= 0"
+        );
+        anyhow::ensure!(
+            self.sigma_max >= self.sigma_floor,
+            "net.mask.sigma_max ({}) must be >= sigma_floor ({})",
+            self.sigma_max,
+            self.sigma_floor
+        );
+        anyhow::ensure!(
+            self.entropy_weight.is_finite() && self.entropy_weight >= 0.0,
+            "net.mask.entropy_weight = {}: expected a finite value >= 0",
+            self.entropy_weight
+        );
+        anyhow::ensure!(
+            self.transfer_bonus.is_finite(),
+            "net.mask.transfer_bonus = {}: expected a finite value",
+            self.transfer_bonus
+        );
+        anyhow::ensure!(
+            self.score_init_std.is_finite() && self.sigma_max.is_finite(),
+            "net.mask.score_init_std and sigma_max must be finite"
+        );
         Ok(())
     }
 }

@@ -16,7 +16,15 @@ use serde::Serialize;
 #[serde(tag = "event", rename_all = "snake_case")]
 pub enum Event {
     /// A training step begins.
-    TaskStarted { step: usize, task: TaskId, name: String, iterations: usize, switches: Switches, related: Vec<TaskId>, fine_tune: bool },
+    TaskStarted {
+        step: usize,
+        task: TaskId,
+        name: String,
+        iterations: usize,
+        switches: Switches,
+        related: Vec<TaskId>,
+        fine_tune: bool,
+    },
     /// One training iteration finished.
     Iteration { step: usize, task: TaskId, iteration: usize, iterations: usize, metrics: Metrics },
     /// The training step ended (masks chosen, per-task state frozen).

@@ -35,10 +35,22 @@ pub struct FinetuneReport {
 
 /// Fine-tunes task `task` of the policy in `policy` on `shift` and writes the
 /// new policy directory `out` (with `finetune.json`). `iterations` overrides the shift file's.
-pub fn finetune(policy: &Path, task: &str, shift: &Shift, out: &Path, seed: u64, episodes: usize, progress: bool) -> anyhow::Result<FinetuneReport> {
+pub fn finetune(
+    policy: &Path,
+    task: &str,
+    shift: &Shift,
+    out: &Path,
+    seed: u64,
+    episodes: usize,
+    progress: bool,
+) -> anyhow::Result<FinetuneReport> {
     shift.validate()?;
     anyhow::ensure!(out != policy, "--out must be a new directory, not the policy itself");
-    anyhow::ensure!(!out.join(crate::nn::checkpoint::MANIFEST_FILE).exists(), "{} already holds a policy", out.display());
+    anyhow::ensure!(
+        !out.join(crate::nn::checkpoint::MANIFEST_FILE).exists(),
+        "{} already holds a policy",
+        out.display()
+    );
     let (mut learner, tasks) = PpoTaskLearner::from_policy(policy, episodes)?;
     let id = tasks.iter().position(|t| t == task).ok_or_else(|| {
         anyhow::anyhow!("{}: no task {task:?} to fine-tune; it has {tasks:?} (fine-tuning trains a learned task's private parameters)", policy.display())
@@ -60,7 +72,11 @@ pub fn finetune(policy: &Path, task: &str, shift: &Shift, out: &Path, seed: u64,
     };
     learner.begin_task(&start)?;
     let bar = if progress { ProgressBar::new(shift.iterations as u64) } else { ProgressBar::hidden() };
-    bar.set_style(ProgressStyle::with_template("{elapsed_precise} finetune [{bar:30}] {pos}/{len} it  {msg}").expect("a valid template").progress_chars("=> "));
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} finetune [{bar:30}] {pos}/{len} it  {msg}")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
     let mut curve = Vec::new();
     for _ in 0..shift.iterations {
         let m = learner.train_iteration()?;
@@ -73,9 +89,18 @@ pub fn finetune(policy: &Path, task: &str, shift: &Shift, out: &Path, seed: u64,
     bar.finish();
     learner.end_task()?;
     let after = evaluate_all(&mut learner)?;
-    let changed_other_tasks = before.iter().zip(&after).filter(|(b, a)| b.task != task && b != a).map(|(b, _)| b.task.clone()).collect();
+    let changed_other_tasks =
+        before.iter().zip(&after).filter(|(b, a)| b.task != task && b != a).map(|(b, _)| b.task.clone()).collect();
     learner.save(out, &tasks)?;
-    let report = FinetuneReport { task: task.to_string(), shift: shift.clone(), iterations: shift.iterations, before, after, changed_other_tasks, curve };
+    let report = FinetuneReport {
+        task: task.to_string(),
+        shift: shift.clone(),
+        iterations: shift.iterations,
+        before,
+        after,
+        changed_other_tasks,
+        curve,
+    };
     write_atomic(&out.join("finetune.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
     Ok(report)
 }

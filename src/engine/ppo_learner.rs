@@ -170,7 +170,9 @@ impl Learner for PpoTaskLearner {
         let result = (|| {
             agent.set_mask_config(&start.mask)?;
             // A repeat starts from its own state, a new task from the last trained one's.
-            if let Some(state) = self.states.get(&start.task).or_else(|| self.last_task.and_then(|t| self.states.get(&t))) {
+            if let Some(state) =
+                self.states.get(&start.task).or_else(|| self.last_task.and_then(|t| self.states.get(&t)))
+            {
                 Self::install(&mut agent, state)?;
             }
             agent.begin_task(start.task, &start.related)?;
@@ -213,7 +215,8 @@ impl Learner for PpoTaskLearner {
     }
 
     fn evaluate(&mut self, task: TaskId, name: &str, seed: u64) -> anyhow::Result<Evaluation> {
-        let state = self.states.get(&task).cloned().with_context(|| format!("task {task} ({name}) has not been learned"))?;
+        let state =
+            self.states.get(&task).cloned().with_context(|| format!("task {task} ({name}) has not been learned"))?;
         let perturbation = Perturbation::from_str(name).map_err(|e| anyhow::anyhow!("task {name}: {e}"))?;
         let env_cfg = self.env.clone();
         let episodes = self.eval_episodes;
@@ -277,7 +280,8 @@ impl Learner for PpoTaskLearner {
                 TaskState {
                     log_std: log_std.copy()?,
                     obs: get_normalizer(&format!("obs_normalizer.t{t}"), &policy.extras, clip).with_context(at)?,
-                    privileged: get_normalizer(&format!("privileged_normalizer.t{t}"), &policy.extras, clip).with_context(at)?,
+                    privileged: get_normalizer(&format!("privileged_normalizer.t{t}"), &policy.extras, clip)
+                        .with_context(at)?,
                 },
             );
         }
@@ -286,10 +290,17 @@ impl Learner for PpoTaskLearner {
             None => states.keys().next_back().copied(),
         };
         let mut agent = Agent::new(info.dims, &self.config, self.config.seed)?;
-        anyhow::ensure!(agent.dims == self.agent_ref().dims, "{}: the policy was built for other observation/action widths", dir.display());
+        anyhow::ensure!(
+            agent.dims == self.agent_ref().dims,
+            "{}: the policy was built for other observation/action widths",
+            dir.display()
+        );
         let mut networks = policy.networks;
         let mut take = |name: &str| -> anyhow::Result<MaskedMlp> {
-            let i = networks.iter().position(|n| n.name() == name).with_context(|| format!("{}: no network {name}", dir.display()))?;
+            let i = networks
+                .iter()
+                .position(|n| n.name() == name)
+                .with_context(|| format!("{}: no network {name}", dir.display()))?;
             Ok(networks.swap_remove(i))
         };
         let fresh_sizes: Vec<Vec<usize>> = agent.networks().iter().map(|n| n.sizes().to_vec()).collect();
@@ -298,7 +309,13 @@ impl Learner for PpoTaskLearner {
         agent.encoder = take("cenet_encoder")?;
         agent.decoder = take("cenet_decoder")?;
         for (net, sizes) in agent.networks().iter().zip(&fresh_sizes) {
-            anyhow::ensure!(net.sizes() == sizes.as_slice(), "{}: network {} has sizes {:?}, the run's config wants {sizes:?}", dir.display(), net.name(), net.sizes());
+            anyhow::ensure!(
+                net.sizes() == sizes.as_slice(),
+                "{}: network {} has sizes {:?}, the run's config wants {sizes:?}",
+                dir.display(),
+                net.name(),
+                net.sizes()
+            );
         }
         if let Some(state) = last_task.and_then(|t| states.get(&t)) {
             Self::install(&mut agent, state)?;
@@ -318,12 +335,17 @@ fn put_normalizer(prefix: &str, n: &RunningNormalizer, out: &mut BTreeMap<String
     out.insert(format!("{prefix}.count"), Tensor::new(&[n.count() as f32], &Device::Cpu)?);
     // The row count exactly (f32 holds integers only up to 2^24): high and low 24 bits.
     let count = n.count() as u64;
-    out.insert(format!("{prefix}.count_exact"), Tensor::new(&[(count >> 24) as f32, (count & 0xff_ffff) as f32], &Device::Cpu)?);
+    out.insert(
+        format!("{prefix}.count_exact"),
+        Tensor::new(&[(count >> 24) as f32, (count & 0xff_ffff) as f32], &Device::Cpu)?,
+    );
     Ok(())
 }
 
 fn get_normalizer(prefix: &str, extras: &BTreeMap<String, Tensor>, clip: f32) -> anyhow::Result<RunningNormalizer> {
-    let get = |key: &str| extras.get(&format!("{prefix}.{key}")).with_context(|| format!("missing extra tensor {prefix}.{key}"));
+    let get = |key: &str| {
+        extras.get(&format!("{prefix}.{key}")).with_context(|| format!("missing extra tensor {prefix}.{key}"))
+    };
     let count = match extras.get(&format!("{prefix}.count_exact")) {
         Some(t) => match t.flatten_all()?.to_vec1::<f32>()?.as_slice() {
             [hi, lo] => ((*hi as u64) << 24 | *lo as u64) as f64,
@@ -331,7 +353,8 @@ fn get_normalizer(prefix: &str, extras: &BTreeMap<String, Tensor>, clip: f32) ->
         },
         None => f64::from(get("count")?.flatten_all()?.to_vec1::<f32>()?.first().copied().unwrap_or(0.0)),
     };
-    let mut n = RunningNormalizer::from_saved(&get("mean")?.to_vec1::<f32>()?, &get("var")?.to_vec1::<f32>()?, count, clip)?;
+    let mut n =
+        RunningNormalizer::from_saved(&get("mean")?.to_vec1::<f32>()?, &get("var")?.to_vec1::<f32>()?, count, clip)?;
     n.freeze();
     Ok(n)
 }

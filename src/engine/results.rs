@@ -134,11 +134,16 @@ mod tests {
     #[test]
     fn a_curve_keeps_each_finite_metric_and_skips_the_rest() {
         let mut curve = TaskCurve::default();
-        let it = |fall: f64, lin: f64| -> Metrics { [("charts/fall_rate".to_string(), fall), ("charts/lin_vel_err".to_string(), lin)].into_iter().collect() };
+        let it = |fall: f64, lin: f64| -> Metrics {
+            [("charts/fall_rate".to_string(), fall), ("charts/lin_vel_err".to_string(), lin)].into_iter().collect()
+        };
         curve.push(&it(0.25, 0.3));
         curve.push(&it(f64::NAN, 0.2));
         assert_eq!((curve.fall_rate, curve.lin_vel_err, curve.performance), (vec![0.25], vec![0.3, 0.2], vec![]));
-        let old: TaskCurve = serde_json::from_str(r#"{"step":0,"task":1,"name":"x","performance":[],"episodic_return":[],"lin_vel_err":[],"ang_vel_err":[]}"#).unwrap();
+        let old: TaskCurve = serde_json::from_str(
+            r#"{"step":0,"task":1,"name":"x","performance":[],"episodic_return":[],"lin_vel_err":[],"ang_vel_err":[]}"#,
+        )
+        .unwrap();
         assert!(old.fall_rate.is_empty(), "a run written before fall_rate was recorded still reads");
     }
 }

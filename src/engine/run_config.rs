@@ -115,7 +115,8 @@ impl RunConfig {
         if !sequence_table.contains_key("task") {
             anyhow::bail!("the run has no [[task]] entries");
         }
-        let sequence: Sequence = toml::Value::Table(sequence_table).try_into().map_err(|e| anyhow::anyhow!("in [[task]]: {e}"))?;
+        let sequence: Sequence =
+            toml::Value::Table(sequence_table).try_into().map_err(|e| anyhow::anyhow!("in [[task]]: {e}"))?;
         sequence.validate()?;
         let (method, overrides) = match method_value {
             None => ("ours".to_string(), SwitchOverrides::default()),
@@ -125,7 +126,8 @@ impl RunConfig {
                     Some(toml::Value::String(s)) => s,
                     Some(other) => anyhow::bail!("[method] name = {other}: expected a string"),
                 };
-                let o: SwitchOverrides = toml::Value::Table(t).try_into().map_err(|e| anyhow::anyhow!("in [method]: {e}"))?;
+                let o: SwitchOverrides =
+                    toml::Value::Table(t).try_into().map_err(|e| anyhow::anyhow!("in [method]: {e}"))?;
                 (name, o)
             }
             Some(other) => anyhow::bail!("method = {other}: expected a [method] table"),
@@ -186,7 +188,10 @@ mod tests {
     #[test]
     fn a_run_without_tasks_or_with_an_unknown_method_is_an_error() {
         assert!(format!("{:#}", RunConfig::from_toml_str("seed = 1\n").unwrap_err()).contains("[[task]]"));
-        let err = format!("{:#}", RunConfig::from_toml_str("[method]\nname = \"ewc\"\n[[task]]\nname = \"none\"\n").unwrap_err());
+        let err = format!(
+            "{:#}",
+            RunConfig::from_toml_str("[method]\nname = \"ewc\"\n[[task]]\nname = \"none\"\n").unwrap_err()
+        );
         assert!(err.contains("ewc"), "{err}");
     }
 }

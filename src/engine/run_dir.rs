@@ -75,7 +75,11 @@ impl MetricsFile {
             plasticity: s.plasticity,
             forward_transfer: s.forward_transfer,
             forward_transfer_mean: s.forward_transfer_mean,
-            command_tracking: CommandTracking { lin_vel_err: s.final_lin_vel_err, ang_vel_err: s.final_ang_vel_err, fall_rate: s.final_fall_rate },
+            command_tracking: CommandTracking {
+                lin_vel_err: s.final_lin_vel_err,
+                ang_vel_err: s.final_ang_vel_err,
+                fall_rate: s.final_fall_rate,
+            },
             steps: results.steps.clone(),
             evaluations: results.evaluations.clone(),
             curves: results.curves.clone(),

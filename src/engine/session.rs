@@ -126,7 +126,10 @@ impl Session {
     /// as finished (a sequence entry naming one fine-tunes it, METHOD.md 2.5)
     /// and are evaluated after every step. Only before any training.
     pub fn with_learned_tasks(mut self, learned: &[String]) -> anyhow::Result<Self> {
-        anyhow::ensure!(self.results.steps.is_empty() && self.in_progress.is_none(), "learned tasks are declared before training");
+        anyhow::ensure!(
+            self.results.steps.is_empty() && self.in_progress.is_none(),
+            "learned tasks are declared before training"
+        );
         self.sequence.validate_with(KnownBefore::Tasks(learned.to_vec()))?;
         let mut tasks = learned.to_vec();
         for t in self.sequence.distinct_tasks() {
@@ -144,7 +147,10 @@ impl Session {
     /// state saved after the last of them in `checkpoint`. Errors (a corrupt
     /// checkpoint, results from another sequence) leave the session untouched.
     pub fn restore(&mut self, results: SessionResults, checkpoint: &Path) -> anyhow::Result<()> {
-        anyhow::ensure!(self.in_progress.is_none() && self.results.steps.is_empty(), "restore: the session has already trained");
+        anyhow::ensure!(
+            self.in_progress.is_none() && self.results.steps.is_empty(),
+            "restore: the session has already trained"
+        );
         anyhow::ensure!(
             results.tasks == self.results.tasks,
             "the saved results are for tasks {:?}, the sequence has {:?}",
@@ -152,9 +158,18 @@ impl Session {
             self.results.tasks
         );
         let done = results.steps.len();
-        anyhow::ensure!(done <= self.sequence.tasks.len(), "the saved results have {done} steps, the sequence only {}", self.sequence.tasks.len());
+        anyhow::ensure!(
+            done <= self.sequence.tasks.len(),
+            "the saved results have {done} steps, the sequence only {}",
+            self.sequence.tasks.len()
+        );
         for (i, s) in results.steps.iter().enumerate() {
-            anyhow::ensure!(s.step == i && s.name == self.sequence.tasks[i].name, "saved step {i} ({}) does not match the sequence ({})", s.name, self.sequence.tasks[i].name);
+            anyhow::ensure!(
+                s.step == i && s.name == self.sequence.tasks[i].name,
+                "saved step {i} ({}) does not match the sequence ({})",
+                s.name,
+                self.sequence.tasks[i].name
+            );
         }
         anyhow::ensure!(
             results.eval_matrix.rows.len() == done && results.curves.len() == done && results.evaluations.len() == done,
@@ -165,7 +180,12 @@ impl Session {
         );
         if done > 0 {
             let names = self.learner.load(checkpoint)?;
-            anyhow::ensure!(names == self.results.tasks, "{}: checkpoint tasks {names:?} differ from the sequence's {:?}", checkpoint.display(), self.results.tasks);
+            anyhow::ensure!(
+                names == self.results.tasks,
+                "{}: checkpoint tasks {names:?} differ from the sequence's {:?}",
+                checkpoint.display(),
+                self.results.tasks
+            );
         }
         results.steps.iter().for_each(|s| self.finished[s.task] = true);
         self.results = results;
@@ -257,9 +277,16 @@ impl Session {
     pub fn set_next_transfer(&mut self, related: Vec<String>, init: TransferInit) -> anyhow::Result<()> {
         for name in &related {
             let id = self.results.tasks.iter().position(|t| t == name);
-            anyhow::ensure!(id.is_some_and(|t| self.finished[t]), "related task {name:?} has not been learned (learned: {:?})", self.learned_names());
+            anyhow::ensure!(
+                id.is_some_and(|t| self.finished[t]),
+                "related task {name:?} has not been learned (learned: {:?})",
+                self.learned_names()
+            );
         }
-        anyhow::ensure!(init != TransferInit::Random || !related.is_empty(), "init = random draws as many tasks as are named, and none is");
+        anyhow::ensure!(
+            init != TransferInit::Random || !related.is_empty(),
+            "init = random draws as many tasks as are named, and none is"
+        );
         self.emit(Event::TransferQueued { related: related.clone(), init });
         self.queued_transfer = Some((related, init));
         Ok(())
@@ -349,28 +376,63 @@ impl Session {
         let seed = derive_seed(self.seed, TRAIN_SEED, step as u64);
         let (related_names, init) = self.queued_transfer.take().unwrap_or((spec.related.clone(), spec.init));
         let related = if fine_tune { Vec::new() } else { self.resolve_related(&related_names, init, task, seed)? };
-        let start = TaskStart { step, task, name: spec.name.clone(), related: related.clone(), mask, iterations: self.sequence.iterations_of(step), seed };
+        let start = TaskStart {
+            step,
+            task,
+            name: spec.name.clone(),
+            related: related.clone(),
+            mask,
+            iterations: self.sequence.iterations_of(step),
+            seed,
+        };
         self.learner.begin_task(&start)?;
         self.method.on_task_start(task, &spec.name)?;
         self.queued = SwitchOverrides::default();
-        let record = StepRecord { step, task, name: spec.name.clone(), iterations: start.iterations, switches: switches.clone(), related: related.clone(), fine_tune };
+        let record = StepRecord {
+            step,
+            task,
+            name: spec.name.clone(),
+            iterations: start.iterations,
+            switches: switches.clone(),
+            related: related.clone(),
+            fine_tune,
+        };
         let curve = TaskCurve { step, task, name: spec.name.clone(), ..Default::default() };
         self.in_progress = Some(InProgress { record, iteration: 0, curve });
-        self.emit(Event::TaskStarted { step, task, name: spec.name, iterations: start.iterations, switches, related, fine_tune });
+        self.emit(Event::TaskStarted {
+            step,
+            task,
+            name: spec.name,
+            iterations: start.iterations,
+            switches,
+            related,
+            fine_tune,
+        });
         Ok(())
     }
 
     /// Task ids for the transfer initialisation (METHOD.md 2.6).
-    fn resolve_related(&self, names: &[String], init: TransferInit, task: TaskId, seed: u64) -> anyhow::Result<Vec<TaskId>> {
+    fn resolve_related(
+        &self,
+        names: &[String],
+        init: TransferInit,
+        task: TaskId,
+        seed: u64,
+    ) -> anyhow::Result<Vec<TaskId>> {
         let id = |n: &String| {
-            self.results.tasks.iter().position(|t| t == n).with_context(|| format!("related task {n:?} is neither in the sequence nor learned before it"))
+            self.results
+                .tasks
+                .iter()
+                .position(|t| t == n)
+                .with_context(|| format!("related task {n:?} is neither in the sequence nor learned before it"))
         };
         let named: Vec<TaskId> = names.iter().map(id).collect::<anyhow::Result<_>>()?;
         match init {
             TransferInit::Scratch => Ok(Vec::new()),
             TransferInit::Related => Ok(named),
             TransferInit::Random => {
-                let learned: Vec<TaskId> = (0..self.finished.len()).filter(|&t| self.finished[t] && t != task).collect();
+                let learned: Vec<TaskId> =
+                    (0..self.finished.len()).filter(|&t| self.finished[t] && t != task).collect();
                 let others: Vec<TaskId> = learned.iter().copied().filter(|t| !named.contains(t)).collect();
                 let pool = if others.len() >= named.len() { others } else { learned };
                 let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, 3, 0));
@@ -412,7 +474,10 @@ impl Session {
     /// Evaluates finished task `task` with its recalled parameters and the
     /// task's fixed evaluation seed.
     pub fn evaluate(&mut self, task: TaskId) -> anyhow::Result<super::learner::Evaluation> {
-        let name = self.results.tasks.get(task).cloned().ok_or_else(|| anyhow::anyhow!("no task {task}: the sequence has {} tasks", self.results.tasks.len()))?;
+        let name =
+            self.results.tasks.get(task).cloned().ok_or_else(|| {
+                anyhow::anyhow!("no task {task}: the sequence has {} tasks", self.results.tasks.len())
+            })?;
         anyhow::ensure!(self.finished[task], "task {task} ({name}) has not been learned yet");
         self.learner.evaluate(task, &name, derive_seed(self.seed, EVAL_SEED, task as u64))
     }

@@ -47,16 +47,23 @@ impl Shift {
     /// Reads a shift file; errors name the file and the key.
     pub fn load(path: &Path) -> anyhow::Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading shift file {}", path.display()))?;
-        let shift: Shift = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{e}")).with_context(|| format!("in shift file {}", path.display()))?;
+        let shift: Shift = toml::from_str(&text)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("in shift file {}", path.display()))?;
         shift.validate().with_context(|| format!("in shift file {}", path.display()))?;
         Ok(shift)
     }
 
     /// Checks the ranges.
     pub fn validate(&self) -> anyhow::Result<()> {
-        for (key, range) in [("friction", self.friction), ("added_mass", self.added_mass), ("motor_strength", self.motor_strength)] {
+        for (key, range) in
+            [("friction", self.friction), ("added_mass", self.added_mass), ("motor_strength", self.motor_strength)]
+        {
             if let Some([lo, hi]) = range {
-                anyhow::ensure!(lo.is_finite() && hi.is_finite() && lo <= hi, "{key} = [{lo}, {hi}]: expected [low, high] with low <= high");
+                anyhow::ensure!(
+                    lo.is_finite() && hi.is_finite() && lo <= hi,
+                    "{key} = [{lo}, {hi}]: expected [low, high] with low <= high"
+                );
             }
         }
         if let Some([lo, _]) = self.friction {
@@ -65,7 +72,11 @@ impl Shift {
         if let Some([lo, _]) = self.motor_strength {
             anyhow::ensure!(lo > 0.0, "motor_strength must be > 0");
         }
-        anyhow::ensure!(self.latency_s >= 0.0 && self.latency_s.is_finite(), "latency_s = {}: expected >= 0", self.latency_s);
+        anyhow::ensure!(
+            self.latency_s >= 0.0 && self.latency_s.is_finite(),
+            "latency_s = {}: expected >= 0",
+            self.latency_s
+        );
         anyhow::ensure!(self.iterations > 0, "iterations must be at least 1");
         Ok(())
     }
@@ -173,11 +184,24 @@ mod tests {
             self.applied.lock().unwrap().push(actions.to_vec());
             self.steps += 1;
             let finished = if self.steps == 2 {
-                vec![crate::rl::FinishedEpisode { env_index: 1, episode_return: 0.0, length_s: 0.04, lin_vel_err: 0.0, ang_vel_err: 0.0, fell: true }]
+                vec![crate::rl::FinishedEpisode {
+                    env_index: 1,
+                    episode_return: 0.0,
+                    length_s: 0.04,
+                    lin_vel_err: 0.0,
+                    ang_vel_err: 0.0,
+                    fell: true,
+                }]
             } else {
                 Vec::new()
             };
-            Ok(EnvStep { reward: vec![0.0; 2], terminated: vec![false; 2], truncated: vec![false; 2], next_obs_before_reset: self.obs.clone(), finished })
+            Ok(EnvStep {
+                reward: vec![0.0; 2],
+                terminated: vec![false; 2],
+                truncated: vec![false; 2],
+                next_obs_before_reset: self.obs.clone(),
+                finished,
+            })
         }
     }
 

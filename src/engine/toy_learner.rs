@@ -112,7 +112,11 @@ impl Learner for ToyLearner {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let x = inputs(&mut rng, EVAL_POINTS);
         let y = targets(&target_matrix(name), &x);
-        let pred: Vec<f32> = self.net.forward_task(task, &Tensor::from_vec(x, (EVAL_POINTS, IN), &Device::Cpu)?)?.flatten_all()?.to_vec1()?;
+        let pred: Vec<f32> = self
+            .net
+            .forward_task(task, &Tensor::from_vec(x, (EVAL_POINTS, IN), &Device::Cpu)?)?
+            .flatten_all()?
+            .to_vec1()?;
         let err: Vec<f64> = pred.iter().zip(&y).map(|(p, t)| f64::from(p - t)).collect();
         let mse = err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64;
         let abs_of = |o: usize| err.iter().skip(o).step_by(OUT).map(|e| e.abs()).sum::<f64>() / EVAL_POINTS as f64;
@@ -140,9 +144,19 @@ impl Learner for ToyLearner {
 
     fn load(&mut self, dir: &Path) -> anyhow::Result<Vec<String>> {
         let mut policy = checkpoint::load_policy(dir)?;
-        anyhow::ensure!(policy.config.get("learner").and_then(|v| v.as_str()) == Some("toy"), "{}: not a toy-learner checkpoint", dir.display());
+        anyhow::ensure!(
+            policy.config.get("learner").and_then(|v| v.as_str()) == Some("toy"),
+            "{}: not a toy-learner checkpoint",
+            dir.display()
+        );
         let net = policy.networks.pop().with_context(|| format!("{}: no network", dir.display()))?;
-        anyhow::ensure!(net.sizes() == self.net.sizes(), "{}: network sizes {:?}, expected {:?}", dir.display(), net.sizes(), self.net.sizes());
+        anyhow::ensure!(
+            net.sizes() == self.net.sizes(),
+            "{}: network sizes {:?}, expected {:?}",
+            dir.display(),
+            net.sizes(),
+            self.net.sizes()
+        );
         self.net = net;
         self.current = None;
         Ok(policy.tasks)

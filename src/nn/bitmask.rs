@@ -28,7 +28,12 @@ impl BitMask {
 
     /// Rebuilds a mask from its packed bytes; errors if the byte count does not fit `len` or padding bits are set.
     pub fn from_bytes(len: usize, bytes: Vec<u8>) -> anyhow::Result<Self> {
-        anyhow::ensure!(bytes.len() == len.div_ceil(8), "a mask of {len} bits needs {} bytes, got {}", len.div_ceil(8), bytes.len());
+        anyhow::ensure!(
+            bytes.len() == len.div_ceil(8),
+            "a mask of {len} bits needs {} bytes, got {}",
+            len.div_ceil(8),
+            bytes.len()
+        );
         if len % 8 != 0 {
             let last = bytes[bytes.len() - 1];
             anyhow::ensure!(last >> (len % 8) == 0, "padding bits of the mask are set");

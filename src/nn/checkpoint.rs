@@ -108,9 +108,20 @@ fn serialize(tensors: &BTreeMap<String, Raw>) -> anyhow::Result<Vec<u8>> {
 }
 
 /// Writes a policy directory (creating it). `tasks` names every TaskId the networks use.
-pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras: &BTreeMap<String, Tensor>, config: &serde_json::Value) -> anyhow::Result<()> {
+pub fn save_policy(
+    dir: &Path,
+    tasks: &[String],
+    networks: &[&MaskedMlp],
+    extras: &BTreeMap<String, Tensor>,
+    config: &serde_json::Value,
+) -> anyhow::Result<()> {
     for (i, a) in networks.iter().enumerate() {
-        ensure!(networks[..i].iter().all(|b| b.name() != a.name()), "{}: two networks are called {:?}", dir.display(), a.name());
+        ensure!(
+            networks[..i].iter().all(|b| b.name() != a.name()),
+            "{}: two networks are called {:?}",
+            dir.display(),
+            a.name()
+        );
     }
     let mut model = BTreeMap::new();
     let mut masks = BTreeMap::new();
@@ -133,13 +144,26 @@ pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras
                 model.insert(format!("{n}.bias.current"), f32_raw(&var_values(&tr.bias)?, vec![l.out_dim]));
             }
             for (t, m) in &l.masks {
-                masks.insert(format!("{n}.mask.{t}"), Raw { dtype: Dtype::U8, shape: vec![m.as_bytes().len()], bytes: m.as_bytes().to_vec() });
+                masks.insert(
+                    format!("{n}.mask.{t}"),
+                    Raw { dtype: Dtype::U8, shape: vec![m.as_bytes().len()], bytes: m.as_bytes().to_vec() },
+                );
             }
             layers.push(LayerEntry { name: n.clone(), shape: [l.out_dim, l.in_dim], init_bound: l.init_bound });
         }
-        let training = net.layers()[0].training.as_ref().map(|t| TrainingEntry { task: t.task, fine_tune: t.fine_tune, iteration: t.iteration });
+        let training = net.layers()[0].training.as_ref().map(|t| TrainingEntry {
+            task: t.task,
+            fine_tune: t.fine_tune,
+            iteration: t.iteration,
+        });
         if let Some(t) = &training {
-            ensure!(t.task < tasks.len(), "{}: task {} in progress has no name (only {} task names given)", net.name(), t.task, tasks.len());
+            ensure!(
+                t.task < tasks.len(),
+                "{}: task {} in progress has no name (only {} task names given)",
+                net.name(),
+                t.task,
+                tasks.len()
+            );
         }
         entries.push(NetworkEntry {
             name: net.name().to_string(),
@@ -157,8 +181,18 @@ pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras
     }
     let model_bytes = serialize(&model)?;
     let mask_bytes = serialize(&masks)?;
-    let files = BTreeMap::from([(MODEL_FILE.to_string(), sha256_hex(&model_bytes)), (MASKS_FILE.to_string(), sha256_hex(&mask_bytes))]);
-    let manifest = Manifest { format_version: FORMAT_VERSION, tasks: tasks.to_vec(), networks: entries, extras: extras.keys().cloned().collect(), config: config.clone(), files };
+    let files = BTreeMap::from([
+        (MODEL_FILE.to_string(), sha256_hex(&model_bytes)),
+        (MASKS_FILE.to_string(), sha256_hex(&mask_bytes)),
+    ]);
+    let manifest = Manifest {
+        format_version: FORMAT_VERSION,
+        tasks: tasks.to_vec(),
+        networks: entries,
+        extras: extras.keys().cloned().collect(),
+        config: config.clone(),
+        files,
+    };
     write_atomic(&dir.join(MODEL_FILE), &model_bytes)?;
     write_atomic(&dir.join(MASKS_FILE), &mask_bytes)?;
     // The manifest goes last: it names the hashes of the files written before it.
@@ -169,9 +203,16 @@ pub fn save_policy(dir: &Path, tasks: &[String], networks: &[&MaskedMlp], extras
 fn read_checked(dir: &Path, file: &str, manifest: &Manifest) -> anyhow::Result<Vec<u8>> {
     let path = dir.join(file);
     let bytes = std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?;
-    let want = manifest.files.get(file).with_context(|| format!("{}: manifest lists no hash for {file}", dir.join(MANIFEST_FILE).display()))?;
+    let want = manifest
+        .files
+        .get(file)
+        .with_context(|| format!("{}: manifest lists no hash for {file}", dir.join(MANIFEST_FILE).display()))?;
     let got = sha256_hex(&bytes);
-    ensure!(&got == want, "{}: content hash mismatch (manifest {want}, file {got}): the file is corrupt or from another policy", path.display());
+    ensure!(
+        &got == want,
+        "{}: content hash mismatch (manifest {want}, file {got}): the file is corrupt or from another policy",
+        path.display()
+    );
     Ok(bytes)
 }
 
@@ -182,7 +223,8 @@ struct Reader<'a> {
 
 impl<'a> Reader<'a> {
     fn new(file: &Path, bytes: &'a [u8]) -> anyhow::Result<Self> {
-        let st = SafeTensors::deserialize(bytes).map_err(|e| anyhow::anyhow!("{}: not a valid safetensors file: {e:?}", file.display()))?;
+        let st = SafeTensors::deserialize(bytes)
+            .map_err(|e| anyhow::anyhow!("{}: not a valid safetensors file: {e:?}", file.display()))?;
         Ok(Self { file: file.display().to_string(), st })
     }
 
@@ -194,7 +236,11 @@ impl<'a> Reader<'a> {
     }
 
     fn f32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f32>> {
-        Ok(self.raw(name, Dtype::F32, shape)?.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+        Ok(self
+            .raw(name, Dtype::F32, shape)?
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect())
     }
 
     /// "{layer}.log_sigma", or ln of "{layer}.sigma" in files from before sigma was trained in log space.
@@ -213,7 +259,11 @@ impl<'a> Reader<'a> {
     }
 
     fn u32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u32>> {
-        Ok(self.raw(name, Dtype::U32, shape)?.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+        Ok(self
+            .raw(name, Dtype::U32, shape)?
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect())
     }
 
     fn shape_of(&self, name: &str) -> anyhow::Result<Vec<usize>> {
@@ -228,9 +278,16 @@ fn var(values: Vec<f32>, shape: &[usize]) -> anyhow::Result<Var> {
 /// Loads a policy directory written by [`save_policy`].
 pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
     let manifest_path = dir.join(MANIFEST_FILE);
-    let text = std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
-    let manifest: Manifest = serde_json::from_str(&text).with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
-    ensure!(manifest.format_version == FORMAT_VERSION, "{}: format version {} is not supported (this build reads {FORMAT_VERSION})", manifest_path.display(), manifest.format_version);
+    let text =
+        std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
+    let manifest: Manifest =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
+    ensure!(
+        manifest.format_version == FORMAT_VERSION,
+        "{}: format version {} is not supported (this build reads {FORMAT_VERSION})",
+        manifest_path.display(),
+        manifest.format_version
+    );
     let model_bytes = read_checked(dir, MODEL_FILE, &manifest)?;
     let mask_bytes = read_checked(dir, MASKS_FILE, &manifest)?;
     let model = Reader::new(&dir.join(MODEL_FILE), &model_bytes)?;
@@ -240,24 +297,64 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
     for e in &manifest.networks {
         let ctx = || format!("{}: network {}", manifest_path.display(), e.name);
         e.mask.validate().with_context(ctx)?;
-        ensure!(e.sizes.len() == e.layers.len() + 1, "{}: {} sizes for {} layers", ctx(), e.sizes.len(), e.layers.len());
-        ensure!(!e.layers.is_empty() && e.sizes.iter().all(|s| *s > 0), "{}: no layers, or a zero size in {:?}", ctx(), e.sizes);
-        ensure!(e.finish_order.iter().all(|t| *t < n_tasks), "{}: a finished task id is out of range of the {n_tasks} tasks", ctx());
+        ensure!(
+            e.sizes.len() == e.layers.len() + 1,
+            "{}: {} sizes for {} layers",
+            ctx(),
+            e.sizes.len(),
+            e.layers.len()
+        );
+        ensure!(
+            !e.layers.is_empty() && e.sizes.iter().all(|s| *s > 0),
+            "{}: no layers, or a zero size in {:?}",
+            ctx(),
+            e.sizes
+        );
+        ensure!(
+            e.finish_order.iter().all(|t| *t < n_tasks),
+            "{}: a finished task id is out of range of the {n_tasks} tasks",
+            ctx()
+        );
         for (i, t) in e.finish_order.iter().enumerate() {
             ensure!(!e.finish_order[..i].contains(t), "{}: task {t} is listed twice in finish_order", ctx());
         }
         if let Some(tr) = &e.training {
-            ensure!(tr.task < n_tasks, "{}: the task in progress ({}) is out of range of the {n_tasks} tasks", ctx(), tr.task);
+            ensure!(
+                tr.task < n_tasks,
+                "{}: the task in progress ({}) is out of range of the {n_tasks} tasks",
+                ctx(),
+                tr.task
+            );
             // A finished task can only be fine-tuned; a new one has no mask to fine-tune.
             let finished = e.finish_order.contains(&tr.task);
-            ensure!(tr.fine_tune == finished, "{}: task {} in progress has fine_tune = {}, but it has {}finished", ctx(), tr.task, tr.fine_tune, if finished { "" } else { "not " });
+            ensure!(
+                tr.fine_tune == finished,
+                "{}: task {} in progress has fine_tune = {}, but it has {}finished",
+                ctx(),
+                tr.task,
+                tr.fine_tune,
+                if finished { "" } else { "not " }
+            );
         }
         let mut layers = Vec::new();
         for (i, le) in e.layers.iter().enumerate() {
             let [out_dim, in_dim] = le.shape;
-            ensure!([e.sizes[i + 1], e.sizes[i]] == le.shape, "{}: layer {} shape {:?} does not match sizes {:?}", ctx(), le.name, le.shape, e.sizes);
+            ensure!(
+                [e.sizes[i + 1], e.sizes[i]] == le.shape,
+                "{}: layer {} shape {:?} does not match sizes {:?}",
+                ctx(),
+                le.name,
+                le.shape,
+                e.sizes
+            );
             // The re-initialisation draws from U(-init_bound, init_bound).
-            ensure!(le.init_bound.is_finite() && le.init_bound > 0.0, "{}: layer {} has init_bound {}, expected a finite value > 0", ctx(), le.name, le.init_bound);
+            ensure!(
+                le.init_bound.is_finite() && le.init_bound > 0.0,
+                "{}: layer {} has init_bound {}, expected a finite value > 0",
+                ctx(),
+                le.name,
+                le.init_bound
+            );
             let n = &le.name;
             let shape = [out_dim, in_dim];
             let states = model
@@ -266,7 +363,10 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 .map(|c| {
                     let s = ElementState::from_code(c);
                     match s {
-                        ElementState::Private(t) if t >= n_tasks => bail!("{}: {n}.state names private task {t}, but there are {n_tasks} tasks", dir.join(MODEL_FILE).display()),
+                        ElementState::Private(t) if t >= n_tasks => bail!(
+                            "{}: {n}.state names private task {t}, but there are {n_tasks} tasks",
+                            dir.join(MODEL_FILE).display()
+                        ),
                         _ => Ok(s),
                     }
                 })
@@ -276,9 +376,18 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
             for &t in &e.finish_order {
                 let key = format!("{n}.mask.{t}");
                 let bytes = mask_file.raw(&key, Dtype::U8, &mask_file.shape_of(&key)?)?.to_vec();
-                let m = BitMask::from_bytes(out_dim * in_dim, bytes).with_context(|| format!("{}: tensor {key}", dir.join(MASKS_FILE).display()))?;
-                let bad = (0..m.len()).find(|&i| m.get(i) && !matches!(states[i], ElementState::Occupied) && states[i] != ElementState::Private(t));
-                ensure!(bad.is_none(), "{}: {key} selects element {} whose state is {:?}", dir.join(MASKS_FILE).display(), bad.unwrap_or(0), states[bad.unwrap_or(0)]);
+                let m = BitMask::from_bytes(out_dim * in_dim, bytes)
+                    .with_context(|| format!("{}: tensor {key}", dir.join(MASKS_FILE).display()))?;
+                let bad = (0..m.len()).find(|&i| {
+                    m.get(i) && !matches!(states[i], ElementState::Occupied) && states[i] != ElementState::Private(t)
+                });
+                ensure!(
+                    bad.is_none(),
+                    "{}: {key} selects element {} whose state is {:?}",
+                    dir.join(MASKS_FILE).display(),
+                    bad.unwrap_or(0),
+                    states[bad.unwrap_or(0)]
+                );
                 masks.insert(t, m);
                 biases.insert(t, model.f32s(&format!("{n}.bias.{t}"), &[out_dim])?);
             }
@@ -313,7 +422,13 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 training,
             });
         }
-        networks.push(MaskedMlp { name: e.name.clone(), sizes: e.sizes.clone(), activation: e.activation, cfg: e.mask.clone(), layers });
+        networks.push(MaskedMlp {
+            name: e.name.clone(),
+            sizes: e.sizes.clone(),
+            activation: e.activation,
+            cfg: e.mask.clone(),
+            layers,
+        });
     }
     let mut extras = BTreeMap::new();
     for name in &manifest.extras {

@@ -31,7 +31,8 @@ fn fast_exp(x: f32) -> f32 {
     // Round to nearest by the 1.5 * 2^23 trick (no libm call, so the loop vectorises).
     let n = (x * std::f32::consts::LOG2_E + 12_582_912.0) - 12_582_912.0;
     let r = x - n * 0.693_145_75 - n * 1.428_606_8e-6;
-    let p = 1.0 + r * (1.0 + r * (0.5 + r * (0.166_666_67 + r * (0.041_666_668 + r * (0.008_333_334 + r * 0.001_388_889)))));
+    let p = 1.0
+        + r * (1.0 + r * (0.5 + r * (0.166_666_67 + r * (0.041_666_668 + r * (0.008_333_334 + r * 0.001_388_889)))));
     f32::from_bits(((n as i32 + 127) << 23) as u32) * p
 }
 
@@ -60,8 +61,20 @@ fn activation_grad_in_place(act: Activation, g: &mut [f32], y: &[f32]) {
     g.par_chunks_mut(CHUNK).zip(y.par_chunks(CHUNK)).for_each(|(g, y)| {
         for (g, &y) in g.iter_mut().zip(y) {
             *g *= match act {
-                Activation::Elu => if y > 0.0 { 1.0 } else { y + 1.0 },
-                Activation::Relu => if y > 0.0 { 1.0 } else { 0.0 },
+                Activation::Elu => {
+                    if y > 0.0 {
+                        1.0
+                    } else {
+                        y + 1.0
+                    }
+                }
+                Activation::Relu => {
+                    if y > 0.0 {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                }
                 Activation::Tanh => 1.0 - y * y,
                 Activation::Identity => 1.0,
             };
@@ -78,12 +91,44 @@ fn parallelism() -> Parallelism {
 
 /// dst (m, n) row-major = alpha * dst + A B, with A and B given by (pointer, col stride, row stride).
 #[allow(clippy::too_many_arguments)]
-fn matmul(m: usize, n: usize, k: usize, dst: &mut [f32], keep_dst: bool, a: &[f32], a_cs: usize, a_rs: usize, b: &[f32], b_cs: usize, b_rs: usize) {
+fn matmul(
+    m: usize,
+    n: usize,
+    k: usize,
+    dst: &mut [f32],
+    keep_dst: bool,
+    a: &[f32],
+    a_cs: usize,
+    a_rs: usize,
+    b: &[f32],
+    b_cs: usize,
+    b_rs: usize,
+) {
     assert!(dst.len() >= m * n);
     // SAFETY: the strides describe in-bounds (m, k) and (k, n) views of `a` and `b`
     // (asserted by the callers' shapes) and dst is an exclusive (m, n) row-major buffer.
     unsafe {
-        gemm(m, n, k, dst.as_mut_ptr(), 1, n as isize, keep_dst, a.as_ptr(), a_cs as isize, a_rs as isize, b.as_ptr(), b_cs as isize, b_rs as isize, if keep_dst { 1.0 } else { 0.0 }, 1.0, false, false, false, parallelism())
+        gemm(
+            m,
+            n,
+            k,
+            dst.as_mut_ptr(),
+            1,
+            n as isize,
+            keep_dst,
+            a.as_ptr(),
+            a_cs as isize,
+            a_rs as isize,
+            b.as_ptr(),
+            b_cs as isize,
+            b_rs as isize,
+            if keep_dst { 1.0 } else { 0.0 },
+            1.0,
+            false,
+            false,
+            false,
+            parallelism(),
+        )
     }
 }
 
@@ -129,7 +174,8 @@ impl FusedMlp {
             let h = if l == 0 { x } else { &hidden[l - 1] };
             let bias = &theta[b_at..b_at + width];
             let mut z = vec![0f32; batch * width];
-            z.par_chunks_mut(width * ROW_BLOCK).for_each(|rows| rows.chunks_mut(width).for_each(|r| r.copy_from_slice(bias)));
+            z.par_chunks_mut(width * ROW_BLOCK)
+                .for_each(|rows| rows.chunks_mut(width).for_each(|r| r.copy_from_slice(bias)));
             // z (batch, width) += h (batch, fan_in) . W^T, W (width, fan_in) row-major.
             matmul(batch, width, fan_in, &mut z, true, h, 1, fan_in, &theta[w_at..], fan_in, 1);
             if l < last {
@@ -147,7 +193,13 @@ impl FusedMlp {
 }
 
 /// Runs the MLP: differentiable in x and theta when `track` is true.
-pub fn fused_mlp(sizes: &[usize], activation: Activation, x: &Tensor, theta: &Tensor, track: bool) -> candle_core::Result<Tensor> {
+pub fn fused_mlp(
+    sizes: &[usize],
+    activation: Activation,
+    x: &Tensor,
+    theta: &Tensor,
+    track: bool,
+) -> candle_core::Result<Tensor> {
     let op = FusedMlp { sizes: sizes.to_vec(), activation, saved: Mutex::new(None) };
     let (x, theta) = (x.contiguous()?, theta.contiguous()?);
     if track {
@@ -169,22 +221,41 @@ impl CustomOp2 for FusedMlp {
         "fused-mlp"
     }
 
-    fn cpu_fwd(&self, s1: &CpuStorage, l1: &Layout, s2: &CpuStorage, l2: &Layout) -> candle_core::Result<(CpuStorage, Shape)> {
+    fn cpu_fwd(
+        &self,
+        s1: &CpuStorage,
+        l1: &Layout,
+        s2: &CpuStorage,
+        l2: &Layout,
+    ) -> candle_core::Result<(CpuStorage, Shape)> {
         let (x, theta) = (slice(s1, l1)?, slice(s2, l2)?);
         let dims = l1.dims();
         if dims.len() != 2 || dims[1] != self.sizes[0] {
             candle_core::bail!("fused-mlp: input shape {dims:?}, expected (batch, {})", self.sizes[0]);
         }
         if theta.len() != theta_len(&self.sizes) {
-            candle_core::bail!("fused-mlp: theta has {} elements, sizes {:?} need {}", theta.len(), self.sizes, theta_len(&self.sizes));
+            candle_core::bail!(
+                "fused-mlp: theta has {} elements, sizes {:?} need {}",
+                theta.len(),
+                self.sizes,
+                theta_len(&self.sizes)
+            );
         }
         let out = self.run(x, theta, true);
         Ok((CpuStorage::F32(out), Shape::from((dims[0], *self.sizes.last().expect("sizes checked")))))
     }
 
-    fn bwd(&self, arg1: &Tensor, _arg2: &Tensor, _res: &Tensor, grad_res: &Tensor) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
+    fn bwd(
+        &self,
+        arg1: &Tensor,
+        _arg2: &Tensor,
+        _res: &Tensor,
+        grad_res: &Tensor,
+    ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
         let guard = self.saved.lock().expect("fused MLP lock");
-        let Some((x, hidden, theta)) = guard.as_ref() else { candle_core::bail!("fused-mlp: backward without forward") };
+        let Some((x, hidden, theta)) = guard.as_ref() else {
+            candle_core::bail!("fused-mlp: backward without forward")
+        };
         let mut g = grad_res.contiguous()?.flatten_all()?.to_vec1::<f32>()?;
         let batch = x.len() / self.sizes[0];
         let (offs, total) = offsets(&self.sizes);
@@ -198,7 +269,19 @@ impl CustomOp2 for FusedMlp {
             }
             let h: &[f32] = if l == 0 { x } else { &hidden[l - 1] };
             // dW (width, fan_in) = g^T (width, batch) . h (batch, fan_in).
-            matmul(width, fan_in, batch, &mut grad_theta[w_at..w_at + width * fan_in], false, &g, width, 1, h, 1, fan_in);
+            matmul(
+                width,
+                fan_in,
+                batch,
+                &mut grad_theta[w_at..w_at + width * fan_in],
+                false,
+                &g,
+                width,
+                1,
+                h,
+                1,
+                fan_in,
+            );
             let partial: Vec<Vec<f32>> = g
                 .par_chunks(width * ROW_BLOCK)
                 .map(|rows| {
@@ -218,7 +301,8 @@ impl CustomOp2 for FusedMlp {
                 g = prev;
             }
         }
-        let grad_x = if need_x { Some(Tensor::from_vec(g, (batch, self.sizes[0]), &candle_core::Device::Cpu)?) } else { None };
+        let grad_x =
+            if need_x { Some(Tensor::from_vec(g, (batch, self.sizes[0]), &candle_core::Device::Cpu)?) } else { None };
         Ok((grad_x, Some(Tensor::from_vec(grad_theta, total, &candle_core::Device::Cpu)?)))
     }
 }
@@ -236,7 +320,29 @@ mod tests {
         let b: Vec<f32> = (0..k * n).map(|i| ((i * 104729) % 997) as f32 / 997.0 - 0.5).collect();
         let run = |par: Parallelism| {
             let mut dst = vec![0f32; m * n];
-            unsafe { gemm(m, n, k, dst.as_mut_ptr(), 1, n as isize, false, a.as_ptr(), 1, k as isize, b.as_ptr(), 1, n as isize, 0.0, 1.0, false, false, false, par) };
+            unsafe {
+                gemm(
+                    m,
+                    n,
+                    k,
+                    dst.as_mut_ptr(),
+                    1,
+                    n as isize,
+                    false,
+                    a.as_ptr(),
+                    1,
+                    k as isize,
+                    b.as_ptr(),
+                    1,
+                    n as isize,
+                    0.0,
+                    1.0,
+                    false,
+                    false,
+                    false,
+                    par,
+                )
+            };
             dst.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
         };
         let single = run(Parallelism::None);
@@ -265,7 +371,12 @@ mod tests {
             let (offs, _) = offsets(&sizes);
             let mut h = x.as_tensor().clone();
             for (l, &(w_at, b_at)) in offs.iter().enumerate() {
-                let w = theta.as_tensor().narrow(0, w_at, sizes[l] * sizes[l + 1]).unwrap().reshape((sizes[l + 1], sizes[l])).unwrap();
+                let w = theta
+                    .as_tensor()
+                    .narrow(0, w_at, sizes[l] * sizes[l + 1])
+                    .unwrap()
+                    .reshape((sizes[l + 1], sizes[l]))
+                    .unwrap();
                 let b = theta.as_tensor().narrow(0, b_at, sizes[l + 1]).unwrap();
                 h = h.matmul(&w.t().unwrap()).unwrap().broadcast_add(&b).unwrap();
                 if l + 1 < offs.len() {
@@ -273,7 +384,10 @@ mod tests {
                 }
             }
             let close = |a: &Tensor, b: &Tensor, what: &str| {
-                let (a, b) = (a.flatten_all().unwrap().to_vec1::<f32>().unwrap(), b.flatten_all().unwrap().to_vec1::<f32>().unwrap());
+                let (a, b) = (
+                    a.flatten_all().unwrap().to_vec1::<f32>().unwrap(),
+                    b.flatten_all().unwrap().to_vec1::<f32>().unwrap(),
+                );
                 for (i, (a, b)) in a.iter().zip(&b).enumerate() {
                     assert!((a - b).abs() < 1e-4 * (1.0 + b.abs()), "{act:?} {what}[{i}]: {a} vs {b}");
                 }

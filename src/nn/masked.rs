@@ -105,7 +105,14 @@ fn mask_tensor(bits: impl Iterator<Item = bool>, out_dim: usize, in_dim: usize) 
 impl MaskedLinear {
     /// A fresh layer: every element vacant, W ~ U(-b, b) with b = sqrt(6 / (c * in)) (He for the
     /// effective fan-in of a masked row; sqrt(3 / (c * in)) when `gain_relu` is false), mu ~ N(0, score_init_std).
-    pub fn new(name: &str, in_dim: usize, out_dim: usize, gain_relu: bool, cfg: &MaskConfig, rng: &mut impl Rng) -> anyhow::Result<Self> {
+    pub fn new(
+        name: &str,
+        in_dim: usize,
+        out_dim: usize,
+        gain_relu: bool,
+        cfg: &MaskConfig,
+        rng: &mut impl Rng,
+    ) -> anyhow::Result<Self> {
         cfg.validate()?;
         anyhow::ensure!(in_dim > 0 && out_dim > 0, "{name}: layer shape ({out_dim}, {in_dim}) must be non-empty");
         let eff_fan_in = (cfg.capacity * in_dim as f64).max(1.0);
@@ -132,7 +139,12 @@ impl MaskedLinear {
     }
 
     fn draw_scores(n: usize, std: f64, rng: &mut impl Rng) -> Vec<f32> {
-        (0..n).map(|_| { let e: f64 = StandardNormal.sample(rng); (std * e) as f32 }).collect()
+        (0..n)
+            .map(|_| {
+                let e: f64 = StandardNormal.sample(rng);
+                (std * e) as f32
+            })
+            .collect()
     }
 
     /// The layer's parameter name, e.g. "actor.l0".
@@ -164,7 +176,11 @@ impl MaskedLinear {
             "{}: the initial weights can only be scaled before the first task starts",
             self.name
         );
-        anyhow::ensure!(factor.is_finite() && factor > 0.0, "{}: init scale must be finite and > 0, got {factor}", self.name);
+        anyhow::ensure!(
+            factor.is_finite() && factor > 0.0,
+            "{}: init scale must be finite and > 0, got {factor}",
+            self.name
+        );
         set_var(&self.weight, var_values(&self.weight)?.into_iter().map(|w| w * factor).collect())?;
         self.init_bound *= factor;
         Ok(())
@@ -219,7 +235,12 @@ impl MaskedLinear {
     /// (the mean of the related tasks' biases, zero without any),
     /// sigma back to its initial value, and mu += delta on the elements of related tasks' masks (2.6).
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
-        anyhow::ensure!(self.training.is_none(), "{}: begin_task({task}) while task {} is still in progress", self.name, self.training.as_ref().map_or(0, |t| t.task));
+        anyhow::ensure!(
+            self.training.is_none(),
+            "{}: begin_task({task}) while task {} is still in progress",
+            self.name,
+            self.training.as_ref().map_or(0, |t| t.task)
+        );
         let fine_tune = self.masks.contains_key(&task);
         let bias = match self.biases.get(&task) {
             Some(b) => b.clone(),
@@ -232,13 +253,25 @@ impl MaskedLinear {
             let delta = (self.cfg.transfer_bonus * self.cfg.score_init_std) as f32;
             let mut bonus = vec![false; mu.len()];
             for r in related {
-                let m = self.masks.get(r).with_context(|| format!("{}: related task {r} has not finished", self.name))?;
+                let m =
+                    self.masks.get(r).with_context(|| format!("{}: related task {r} has not finished", self.name))?;
                 (0..mu.len()).filter(|&i| m.get(i)).for_each(|i| bonus[i] = true);
             }
             mu.iter_mut().zip(&bonus).filter(|(_, b)| **b).for_each(|(m, _)| *m += delta);
             set_var(&self.score_mean, mu)?;
         }
-        self.training = Some(Training { task, fine_tune, iteration: 0, bias, mask: None, noise: None, weight_update: None, score_update: None, previous_selection: None, mask_churn: None });
+        self.training = Some(Training {
+            task,
+            fine_tune,
+            iteration: 0,
+            bias,
+            mask: None,
+            noise: None,
+            weight_update: None,
+            score_update: None,
+            previous_selection: None,
+            mask_churn: None,
+        });
         Ok(())
     }
 
@@ -287,7 +320,8 @@ impl MaskedLinear {
     }
 
     fn training_ready(&self) -> anyhow::Result<&Training> {
-        let t = self.training.as_ref().with_context(|| format!("{}: no task in progress (call begin_task)", self.name))?;
+        let t =
+            self.training.as_ref().with_context(|| format!("{}: no task in progress (call begin_task)", self.name))?;
         anyhow::ensure!(t.mask.is_some(), "{}: call begin_iteration before forward", self.name);
         Ok(t)
     }
@@ -299,7 +333,8 @@ impl MaskedLinear {
         let weight = self.weight.as_tensor();
         let effective = match &t.noise {
             Some(eps) => {
-                let sample = self.score_mean.as_tensor().add(&eps.broadcast_mul(&self.log_sigma.as_tensor().exp()?)?)?;
+                let sample =
+                    self.score_mean.as_tensor().add(&eps.broadcast_mul(&self.log_sigma.as_tensor().exp()?)?)?;
                 let straight_through = mask.add(&sample.sub(&sample.detach())?)?;
                 weight.mul(&straight_through)?
             }
@@ -316,7 +351,8 @@ impl MaskedLinear {
 
     /// Effective weights W * M_t of a finished task, with exact zeros outside the mask.
     pub fn recall_weight(&self, task: TaskId) -> anyhow::Result<(Tensor, Tensor)> {
-        let m = self.masks.get(&task).with_context(|| format!("{}: task {task} has not finished (no mask)", self.name))?;
+        let m =
+            self.masks.get(&task).with_context(|| format!("{}: task {task} has not finished (no mask)", self.name))?;
         let w = var_values(&self.weight)?;
         let eff: Vec<f32> = w.iter().enumerate().map(|(i, &w)| if m.get(i) { w } else { 0.0 }).collect();
         let eff = Tensor::from_vec(eff, (self.out_dim, self.in_dim), &Device::Cpu)?;
@@ -337,7 +373,8 @@ impl MaskedLinear {
         match &self.training {
             Some(t) if !t.fine_tune && self.cfg.entropy && t.iteration < self.cfg.entropy_iterations => {
                 let n = (self.out_dim * self.in_dim) as f64;
-                let h = ((self.log_sigma.as_tensor() * n)? + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
+                let h = ((self.log_sigma.as_tensor() * n)?
+                    + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
                 Ok((h * -self.cfg.entropy_weight)?.sum_all()?)
             }
             _ => Ok(Tensor::zeros((), DType::F32, &Device::Cpu)?),
@@ -348,7 +385,11 @@ impl MaskedLinear {
     /// bias (fine-tune: weight and bias only).
     pub fn parameters(&self) -> Vec<Param> {
         let Some(t) = &self.training else { return Vec::new() };
-        let p = |suffix: &str, var: &Var, m: Option<&Tensor>| Param { name: format!("{}.{suffix}", self.name), var: var.clone(), update_mask: m.cloned() };
+        let p = |suffix: &str, var: &Var, m: Option<&Tensor>| Param {
+            name: format!("{}.{suffix}", self.name),
+            var: var.clone(),
+            update_mask: m.cloned(),
+        };
         let mut out = vec![p("weight", &self.weight, t.weight_update.as_ref())];
         if !t.fine_tune {
             out.push(p("score", &self.score_mean, t.score_update.as_ref()));

@@ -27,7 +27,13 @@ pub struct MaskedMlp {
 
 impl MaskedMlp {
     /// `sizes` = [in, hidden.., out]; the initial weights and scores come from `seed` alone.
-    pub fn new(name: &str, sizes: &[usize], activation: Activation, cfg: &MaskConfig, seed: u64) -> anyhow::Result<Self> {
+    pub fn new(
+        name: &str,
+        sizes: &[usize],
+        activation: Activation,
+        cfg: &MaskConfig,
+        seed: u64,
+    ) -> anyhow::Result<Self> {
         anyhow::ensure!(sizes.len() >= 2, "{name}: an MLP needs at least an input and an output size, got {sizes:?}");
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let last = sizes.len() - 2;
@@ -112,7 +118,10 @@ impl MaskedMlp {
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
         // Checked here first so that no layer starts when another would refuse.
         if let Some(current) = self.current_task() {
-            anyhow::bail!("{}: begin_task({task}) while task {current} is still in progress (call end_task first)", self.name);
+            anyhow::bail!(
+                "{}: begin_task({task}) while task {current} is still in progress (call end_task first)",
+                self.name
+            );
         }
         if let Some(r) = related.iter().find(|r| !self.finished_tasks().contains(r)) {
             anyhow::bail!("{}: related task {r} has not finished (finished: {:?})", self.name, self.finished_tasks());
@@ -142,7 +151,12 @@ impl MaskedMlp {
     /// Concatenates every layer's (weight, bias) into the fused op's theta and runs it.
     fn run(&self, x: &Tensor, weights: Vec<(Tensor, Tensor)>, track: bool) -> anyhow::Result<Tensor> {
         let dims = x.dims();
-        anyhow::ensure!(dims.len() == 2 && dims[1] == self.sizes[0], "{}: input shape {dims:?}, expected (batch, {})", self.name, self.sizes[0]);
+        anyhow::ensure!(
+            dims.len() == 2 && dims[1] == self.sizes[0],
+            "{}: input shape {dims:?}, expected (batch, {})",
+            self.name,
+            self.sizes[0]
+        );
         let mut parts = Vec::with_capacity(2 * weights.len());
         for (w, b) in weights {
             parts.push(w.flatten_all()?);

@@ -95,7 +95,9 @@ impl MaskedAdam {
         for p in params {
             if let Some((g, m)) = grad_and_mask(p, grads)? {
                 sq += match m {
-                    Some(m) => g.iter().zip(&m).map(|(g, m)| if *m != 0.0 { (*g as f64).powi(2) } else { 0.0 }).sum::<f64>(),
+                    Some(m) => {
+                        g.iter().zip(&m).map(|(g, m)| if *m != 0.0 { (*g as f64).powi(2) } else { 0.0 }).sum::<f64>()
+                    }
                     None => g.iter().map(|g| (*g as f64).powi(2)).sum::<f64>(),
                 };
             }
@@ -120,7 +122,11 @@ impl MaskedAdam {
             let Some((g, mask)) = grad_and_mask(p, grads)? else { continue };
             let mut w = var_values(&p.var)?;
             anyhow::ensure!(g.len() == w.len(), "{}: gradient has {} elements, parameter {}", p.name, g.len(), w.len());
-            let mom = self.moments.entry(p.name.clone()).or_insert_with(|| Moments { m: vec![0.0; w.len()], v: vec![0.0; w.len()], step: 0 });
+            let mom = self.moments.entry(p.name.clone()).or_insert_with(|| Moments {
+                m: vec![0.0; w.len()],
+                v: vec![0.0; w.len()],
+                step: 0,
+            });
             anyhow::ensure!(mom.m.len() == w.len(), "{}: parameter changed size between steps", p.name);
             mom.step += 1;
             let (b1, b2) = (c.beta1 as f32, c.beta2 as f32);
@@ -172,7 +178,11 @@ mod tests {
         for step in 0..300 {
             // Alternate the mask so moments exist for elements that are later frozen.
             let m = if step < 50 { vec![1.0; 64] } else { mask.clone() };
-            let p = Param { name: "w".into(), var: var.clone(), update_mask: Some(Tensor::from_vec(m, (8, 8), &Device::Cpu).unwrap()) };
+            let p = Param {
+                name: "w".into(),
+                var: var.clone(),
+                update_mask: Some(Tensor::from_vec(m, (8, 8), &Device::Cpu).unwrap()),
+            };
             let loss = var.as_tensor().sqr().unwrap().sum_all().unwrap();
             let grads = loss.backward().unwrap();
             if step == 50 {
@@ -208,7 +218,8 @@ mod tests {
         let mask = Tensor::from_slice(&[1.0f32, 1.0, 0.0], 3, &Device::Cpu).unwrap();
         let p = Param { name: "w".into(), var: var.clone(), update_mask: Some(mask) };
         let mut grads = (var.as_tensor().sqr().unwrap().sum_all().unwrap() * 0.5).unwrap().backward().unwrap();
-        let norm = MaskedAdam::new(AdamConfig::default()).clip_grad_norm(std::slice::from_ref(&p), &mut grads, 10.0).unwrap();
+        let norm =
+            MaskedAdam::new(AdamConfig::default()).clip_grad_norm(std::slice::from_ref(&p), &mut grads, 10.0).unwrap();
         assert!((norm - 5.0).abs() < 1e-6, "norm {norm}");
     }
 }

@@ -48,7 +48,14 @@ pub fn split_counts(k: usize, k_v: usize, n_vacant: usize, n_occupied: usize) ->
 }
 
 /// Chooses task `task`'s mask: `true` where selected. Panics only on mismatched slice lengths (a programming error).
-pub fn select_mask(scores: &[f32], states: &[ElementState], rows: usize, cols: usize, task: TaskId, p: &SelectionParams) -> Vec<bool> {
+pub fn select_mask(
+    scores: &[f32],
+    states: &[ElementState],
+    rows: usize,
+    cols: usize,
+    task: TaskId,
+    p: &SelectionParams,
+) -> Vec<bool> {
     assert_eq!(scores.len(), rows * cols);
     assert_eq!(states.len(), rows * cols);
     let mut mask = vec![false; rows * cols];
@@ -65,7 +72,8 @@ pub fn select_mask(scores: &[f32], states: &[ElementState], rows: usize, cols: u
     for r in 0..rows {
         let row = r * cols..(r + 1) * cols;
         let vacant: Vec<usize> = row.clone().filter(|&i| is_vacant(states[i])).collect();
-        let others: Vec<usize> = row.clone().filter(|&i| !is_vacant(states[i]) && states[i].selectable_by(task)).collect();
+        let others: Vec<usize> =
+            row.clone().filter(|&i| !is_vacant(states[i]) && states[i].selectable_by(task)).collect();
         let chosen = match p.rule {
             SelectionRule::Split => {
                 let (take_v, take_o) = split_counts(k, vacant_quota(p.vacant_share, k), vacant.len(), others.len());
@@ -139,8 +147,16 @@ mod tests {
             assert_eq!((from_vacant, from_occupied), (k_v, k - k_v), "row {r}");
             // Every selected element of a group beats every unselected one of that group.
             for group in [Vacant, Occupied] {
-                let sel_min = row.clone().filter(|&i| m[i] && states[i] == group).map(|i| scores[i]).fold(f32::INFINITY, f32::min);
-                let unsel_max = row.clone().filter(|&i| !m[i] && states[i] == group).map(|i| scores[i]).fold(f32::NEG_INFINITY, f32::max);
+                let sel_min = row
+                    .clone()
+                    .filter(|&i| m[i] && states[i] == group)
+                    .map(|i| scores[i])
+                    .fold(f32::INFINITY, f32::min);
+                let unsel_max = row
+                    .clone()
+                    .filter(|&i| !m[i] && states[i] == group)
+                    .map(|i| scores[i])
+                    .fold(f32::NEG_INFINITY, f32::max);
                 assert!(sel_min > unsel_max, "row {r} group {group:?}");
             }
         }
@@ -153,7 +169,14 @@ mod tests {
         assert_eq!(split_counts(10, 3, 4, 4), (4, 4));
         // First task: everything vacant, a plain top-k.
         let scores: Vec<f32> = (0..10).map(|i| i as f32).collect();
-        let m = select_mask(&scores, &[Vacant; 10], 1, 10, 0, &SelectionParams { capacity: 0.5, vacant_share: 0.25, rule: SelectionRule::Split });
+        let m = select_mask(
+            &scores,
+            &[Vacant; 10],
+            1,
+            10,
+            0,
+            &SelectionParams { capacity: 0.5, vacant_share: 0.25, rule: SelectionRule::Split },
+        );
         assert_eq!(m, [false, false, false, false, false, true, true, true, true, true]);
     }
 

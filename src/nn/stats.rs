@@ -92,7 +92,13 @@ fn layer_masks(l: &MaskedLinear, tasks: &[String]) -> LayerMasks {
 pub fn mask_report(tasks: &[String], networks: &[&MaskedMlp]) -> MaskReport {
     MaskReport {
         tasks: tasks.to_vec(),
-        networks: networks.iter().map(|n| NetworkMasks { name: n.name().to_string(), layers: n.layers().iter().map(|l| layer_masks(l, tasks)).collect() }).collect(),
+        networks: networks
+            .iter()
+            .map(|n| NetworkMasks {
+                name: n.name().to_string(),
+                layers: n.layers().iter().map(|l| layer_masks(l, tasks)).collect(),
+            })
+            .collect(),
     }
 }
 
@@ -106,10 +112,35 @@ impl MaskReport {
             for l in &net.layers {
                 let total = l.shape[0] * l.shape[1];
                 let private: usize = l.private.values().sum();
-                let _ = writeln!(s, "\n{} [{} x {}]  vacant {} ({:.1}%)  occupied {} ({:.1}%)  private {} ({:.1}%)", l.name, l.shape[0], l.shape[1], l.vacant, pct(l.vacant, total), l.occupied, pct(l.occupied, total), private, pct(private, total));
-                let _ = writeln!(s, "  {:<24} {:>9} {:>9} {:>11} {:>13} {:>8}", "task", "selected", "fraction", "from_vacant", "from_occupied", "private");
+                let _ = writeln!(
+                    s,
+                    "\n{} [{} x {}]  vacant {} ({:.1}%)  occupied {} ({:.1}%)  private {} ({:.1}%)",
+                    l.name,
+                    l.shape[0],
+                    l.shape[1],
+                    l.vacant,
+                    pct(l.vacant, total),
+                    l.occupied,
+                    pct(l.occupied, total),
+                    private,
+                    pct(private, total)
+                );
+                let _ = writeln!(
+                    s,
+                    "  {:<24} {:>9} {:>9} {:>11} {:>13} {:>8}",
+                    "task", "selected", "fraction", "from_vacant", "from_occupied", "private"
+                );
                 for t in &l.per_task {
-                    let _ = writeln!(s, "  {:<24} {:>9} {:>8.1}% {:>11} {:>13} {:>8}", t.task, t.selected, t.fraction * 100.0, t.from_vacant, t.from_occupied, l.private.get(&t.task).copied().unwrap_or(0));
+                    let _ = writeln!(
+                        s,
+                        "  {:<24} {:>9} {:>8.1}% {:>11} {:>13} {:>8}",
+                        t.task,
+                        t.selected,
+                        t.fraction * 100.0,
+                        t.from_vacant,
+                        t.from_occupied,
+                        l.private.get(&t.task).copied().unwrap_or(0)
+                    );
                 }
             }
         }

@@ -91,7 +91,13 @@ impl Agent {
             s
         };
         let mask = &net.mask;
-        let mut actor = MaskedMlp::new("actor", &sizes(dims.obs + context, &net.actor.hidden, dims.act), net.actor.activation, mask, seed)?;
+        let mut actor = MaskedMlp::new(
+            "actor",
+            &sizes(dims.obs + context, &net.actor.hidden, dims.act),
+            net.actor.activation,
+            mask,
+            seed,
+        )?;
         actor.scale_output_init(cfg.actor_output_init_scale as f32)?;
         let critic = MaskedMlp::new(
             "critic",

@@ -32,7 +32,13 @@ pub struct EvalReport {
 /// Runs every member of `env` for one episode with `agent`'s deterministic
 /// policy and summarises them. `max_steps` bounds the loop (an env that never
 /// ends an episode is an error, naming how many did).
-pub fn evaluate(agent: &Agent, env: &mut dyn TrainEnv, task: &str, seed: u64, max_steps: usize) -> anyhow::Result<EvalReport> {
+pub fn evaluate(
+    agent: &Agent,
+    env: &mut dyn TrainEnv,
+    task: &str,
+    seed: u64,
+    max_steps: usize,
+) -> anyhow::Result<EvalReport> {
     let n = env.num_envs();
     let mut first: Vec<Option<FinishedEpisode>> = vec![None; n];
     let mut done = 0;

@@ -58,7 +58,14 @@ pub fn analyse(contacts: &[[bool; 4]], dt: f32) -> GaitSummary {
     };
     let (diagonal, lateral, fore_aft) = (agreement(&DIAGONAL), agreement(&LATERAL), agreement(&FORE_AFT));
     let gait = classify(&duty, diagonal, lateral, fore_aft);
-    GaitSummary { duty_factor: duty, touchdowns_per_s, diagonal_agreement: diagonal, lateral_agreement: lateral, fore_aft_agreement: fore_aft, gait }
+    GaitSummary {
+        duty_factor: duty,
+        touchdowns_per_s,
+        diagonal_agreement: diagonal,
+        lateral_agreement: lateral,
+        fore_aft_agreement: fore_aft,
+        gait,
+    }
 }
 
 /// What [`analyse`] finds in a contact sequence.
@@ -96,12 +103,23 @@ fn classify(duty: &[f32; 4], diagonal: f32, lateral: f32, fore_aft: f32) -> Stri
 /// One line per foot of the last `steps` steps: `#` on the ground, `.` in the air.
 pub fn contact_strip(contacts: &[[bool; 4]], steps: usize) -> Vec<String> {
     let tail = &contacts[contacts.len().saturating_sub(steps)..];
-    (0..4).map(|f| format!("{} {}", FEET[f], tail.iter().map(|c| if c[f] { '#' } else { '.' }).collect::<String>())).collect()
+    (0..4)
+        .map(|f| format!("{} {}", FEET[f], tail.iter().map(|c| if c[f] { '#' } else { '.' }).collect::<String>()))
+        .collect()
 }
 
 /// Runs `agent`'s deterministic policy on one environment of `task` with `command` held for
 /// `warmup_s + seconds` (no pushes, nominal physics) and analyses the last `seconds`.
-pub fn record(agent: &Agent, env_cfg: &EnvConfig, robot: &RobotModel, task: &Perturbation, command: [f32; 3], warmup_s: f32, seconds: f32, seed: u64) -> anyhow::Result<GaitReport> {
+pub fn record(
+    agent: &Agent,
+    env_cfg: &EnvConfig,
+    robot: &RobotModel,
+    task: &Perturbation,
+    command: [f32; 3],
+    warmup_s: f32,
+    seconds: f32,
+    seed: u64,
+) -> anyhow::Result<GaitReport> {
     let cfg = EnvConfig { randomize: false, push_interval_s: 0.0, ..env_cfg.clone() };
     let mut env = LocomotionEnv::new(&cfg, robot, task)?;
     env.reset(seed)?;
@@ -187,7 +205,8 @@ mod tests {
 
     #[test]
     fn the_strip_shows_the_last_steps_of_each_foot() {
-        let strip = contact_strip(&[[true, false, true, false], [false, true, true, false], [true, true, false, false]], 2);
+        let strip =
+            contact_strip(&[[true, false, true, false], [false, true, true, false], [true, true, false, false]], 2);
         assert_eq!(strip, vec!["FL .#", "FR ##", "RL #.", "RR .."]);
     }
 }

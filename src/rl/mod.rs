@@ -33,10 +33,10 @@ pub mod toy_env;
 pub mod trainer;
 
 pub use agent::Agent;
-pub use evaluate::{evaluate, EvalReport};
-pub use policy_dir::{load_policy, save_policy, LoadedPolicy, PolicyInfo};
-pub use trainer::{train, TrainSummary};
 pub use env::{EnvDims, EnvStep, FinishedEpisode, TrainEnv};
+pub use evaluate::{evaluate, EvalReport};
 pub use normalizer::RunningNormalizer;
+pub use policy_dir::{load_policy, save_policy, LoadedPolicy, PolicyInfo};
 pub use ppo::{Metrics, PpoLearner};
 pub use rollout::{gae, RolloutBuffer, RolloutDims, StepRecord};
+pub use trainer::{train, TrainSummary};

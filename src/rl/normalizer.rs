@@ -76,7 +76,11 @@ impl RunningNormalizer {
     /// when frozen. Errors if the batch is not a whole number of rows.
     pub fn update(&mut self, batch: &[f32]) -> anyhow::Result<()> {
         let dim = self.dim();
-        anyhow::ensure!(dim > 0 && batch.len() % dim == 0, "normaliser: batch of {} values is not rows of {dim}", batch.len());
+        anyhow::ensure!(
+            dim > 0 && batch.len() % dim == 0,
+            "normaliser: batch of {} values is not rows of {dim}",
+            batch.len()
+        );
         if self.frozen || batch.is_empty() {
             return Ok(());
         }
@@ -111,7 +115,9 @@ impl RunningNormalizer {
         let total = self.count + batch_count;
         for i in 0..self.dim() {
             let delta = batch_mean[i] - self.mean[i];
-            let m2 = self.var[i] * self.count + batch_var[i] * batch_count + delta * delta * self.count * batch_count / total;
+            let m2 = self.var[i] * self.count
+                + batch_var[i] * batch_count
+                + delta * delta * self.count * batch_count / total;
             self.mean[i] += delta * batch_count / total;
             self.var[i] = m2 / total;
         }

@@ -45,9 +45,16 @@ fn put_normalizer(prefix: &str, n: &RunningNormalizer, out: &mut BTreeMap<String
 }
 
 fn get_normalizer(prefix: &str, extras: &BTreeMap<String, Tensor>, clip: f32) -> anyhow::Result<RunningNormalizer> {
-    let get = |key: &str| extras.get(&format!("{prefix}.{key}")).with_context(|| format!("missing extra tensor {prefix}.{key}"));
+    let get = |key: &str| {
+        extras.get(&format!("{prefix}.{key}")).with_context(|| format!("missing extra tensor {prefix}.{key}"))
+    };
     let count = get("count")?.flatten_all()?.to_vec1::<f32>()?.first().copied().unwrap_or(0.0);
-    RunningNormalizer::from_saved(&get("mean")?.to_vec1::<f32>()?, &get("var")?.to_vec1::<f32>()?, f64::from(count), clip)
+    RunningNormalizer::from_saved(
+        &get("mean")?.to_vec1::<f32>()?,
+        &get("var")?.to_vec1::<f32>()?,
+        f64::from(count),
+        clip,
+    )
 }
 
 /// Writes `agent` after its task ended (`agent.end_task`) to `dir`.
@@ -72,7 +79,10 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
         .with_context(|| format!("{}: the manifest's config is not a quadcl training config", dir.display()))?;
     let mut networks = policy.networks;
     let mut take = |name: &str| -> anyhow::Result<crate::nn::MaskedMlp> {
-        let i = networks.iter().position(|n| n.name() == name).with_context(|| format!("{}: no network {name}", dir.display()))?;
+        let i = networks
+            .iter()
+            .position(|n| n.name() == name)
+            .with_context(|| format!("{}: no network {name}", dir.display()))?;
         Ok(networks.swap_remove(i))
     };
     let mut agent = Agent::new(info.dims, &info.config, info.config.seed)?;
@@ -84,19 +94,35 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
     let learned = learned_tasks(&agent.actor);
     let task_id: TaskId = match task {
         Some(name) => {
-            let t = policy.tasks.iter().position(|t| t == name).with_context(|| format!("{}: no task {name:?}; it has {:?}", dir.display(), policy.tasks))?;
-            anyhow::ensure!(learned.contains(&t), "{}: task {name:?} is not learned yet; learned: {:?}", dir.display(), task_names(&policy.tasks, &learned));
+            let t = policy
+                .tasks
+                .iter()
+                .position(|t| t == name)
+                .with_context(|| format!("{}: no task {name:?}; it has {:?}", dir.display(), policy.tasks))?;
+            anyhow::ensure!(
+                learned.contains(&t),
+                "{}: task {name:?} is not learned yet; learned: {:?}",
+                dir.display(),
+                task_names(&policy.tasks, &learned)
+            );
             t
         }
-        None => agent.actor.current_task().or(learned.last().copied()).with_context(|| format!("{}: the policy has learned no task", dir.display()))?,
+        None => agent
+            .actor
+            .current_task()
+            .or(learned.last().copied())
+            .with_context(|| format!("{}: the policy has learned no task", dir.display()))?,
     };
     let extras = &policy.extras;
-    let log_std = extras.get(&format!("log_std.t{task_id}")).with_context(|| format!("{}: missing log_std.t{task_id}", dir.display()))?;
+    let log_std = extras
+        .get(&format!("log_std.t{task_id}"))
+        .with_context(|| format!("{}: missing log_std.t{task_id}", dir.display()))?;
     agent.log_std.set(log_std)?;
     let clip = info.config.ppo.obs_clip as f32;
-    agent.obs_normalizer = get_normalizer(&format!("obs_normalizer.t{task_id}"), extras, clip).with_context(|| dir.display().to_string())?;
-    agent.privileged_normalizer =
-        get_normalizer(&format!("privileged_normalizer.t{task_id}"), extras, clip).with_context(|| dir.display().to_string())?;
+    agent.obs_normalizer = get_normalizer(&format!("obs_normalizer.t{task_id}"), extras, clip)
+        .with_context(|| dir.display().to_string())?;
+    agent.privileged_normalizer = get_normalizer(&format!("privileged_normalizer.t{task_id}"), extras, clip)
+        .with_context(|| dir.display().to_string())?;
     agent.task = task_id;
     agent.recall = true;
     Ok(LoadedPolicy { agent, tasks: policy.tasks, info })
@@ -163,7 +189,11 @@ pub fn load_policy_or_checkpoint(dir: &Path) -> anyhow::Result<PolicyOrCheckpoin
         return Ok(PolicyOrCheckpoint { policy: loaded, in_progress: false });
     }
     let mut policy = into_training(loaded, dir)?;
-    tracing::info!("{}: task {:?} is still training; using the masks its score means give now", dir.display(), policy.tasks[policy.agent.task]);
+    tracing::info!(
+        "{}: task {:?} is still training; using the masks its score means give now",
+        dir.display(),
+        policy.tasks[policy.agent.task]
+    );
     // end_task also redraws the vacant weights for a next task: they play no part in this one.
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
     policy.agent.end_task(&mut rng)?;

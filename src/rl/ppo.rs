@@ -104,7 +104,12 @@ impl PpoLearner {
     /// Runs the policy for `steps_per_env` steps of every env and computes
     /// advantages. Metrics: episode statistics and where the time went.
     pub fn collect_rollout(&mut self, env: &mut dyn TrainEnv) -> anyhow::Result<Metrics> {
-        anyhow::ensure!(env.num_envs() == self.buffer.num_envs, "env has {} members, learner expects {}", env.num_envs(), self.buffer.num_envs);
+        anyhow::ensure!(
+            env.num_envs() == self.buffer.num_envs,
+            "env has {} members, learner expects {}",
+            env.num_envs(),
+            self.buffer.num_envs
+        );
         self.buffer.clear();
         self.rollout_log_std = Some(self.agent.log_std.as_tensor().copy()?);
         let (mut env_s, mut policy_s) = (0.0f64, 0.0f64);
@@ -168,7 +173,10 @@ impl PpoLearner {
             m.insert("charts/fall_rate".into(), mean(|e| f64::from(u8::from(e.fell))));
         }
         let rewards = &self.buffer.rewards;
-        m.insert("charts/mean_step_reward".into(), rewards.iter().map(|&r| f64::from(r)).sum::<f64>() / rewards.len() as f64);
+        m.insert(
+            "charts/mean_step_reward".into(),
+            rewards.iter().map(|&r| f64::from(r)).sum::<f64>() / rewards.len() as f64,
+        );
         Ok(m)
     }
 
@@ -177,14 +185,16 @@ impl PpoLearner {
     pub fn update(&mut self) -> anyhow::Result<Metrics> {
         let b = &self.buffer;
         let d = b.dims;
-        let rollout_log_std = self.rollout_log_std.clone().ok_or_else(|| anyhow::anyhow!("update called before any rollout"))?;
+        let rollout_log_std =
+            self.rollout_log_std.clone().ok_or_else(|| anyhow::anyhow!("update called before any rollout"))?;
         let cfg = &self.cfg;
         let mut sums = Metrics::new();
         let mut count = 0.0;
         for _epoch in 0..cfg.epochs {
             for indices in minibatch_indices(b.capacity(), cfg.minibatches, &mut self.rng) {
                 let rows = |data: &[f32], width: usize| matrix(&gather_rows(data, width, &indices), width);
-                let column = |data: &[f32]| Tensor::from_vec(gather_rows(data, 1, &indices), indices.len(), &Device::Cpu);
+                let column =
+                    |data: &[f32]| Tensor::from_vec(gather_rows(data, 1, &indices), indices.len(), &Device::Cpu);
                 let obs = rows(&b.obs, d.obs)?; // (B, obs)
                 let context = rows(&b.context, d.context)?; // (B, context)
                 let actions = rows(&b.actions, d.act)?; // (B, act)
@@ -202,9 +212,19 @@ impl PpoLearner {
                 let log_std = self.agent.log_std.as_tensor();
 
                 // Adaptive learning rate from KL(rollout policy || current policy).
-                let kl = f64::from(gaussian_kl(&old_means, &rollout_log_std, &means.detach(), &log_std.detach())?.to_scalar::<f32>()?);
+                let kl = f64::from(
+                    gaussian_kl(&old_means, &rollout_log_std, &means.detach(), &log_std.detach())?
+                        .to_scalar::<f32>()?,
+                );
                 if cfg.adaptive_lr {
-                    let lr = adapt_learning_rate(self.optimizer.learning_rate(), kl, cfg.desired_kl, cfg.lr_factor, cfg.min_lr, cfg.max_lr);
+                    let lr = adapt_learning_rate(
+                        self.optimizer.learning_rate(),
+                        kl,
+                        cfg.desired_kl,
+                        cfg.lr_factor,
+                        cfg.min_lr,
+                        cfg.max_lr,
+                    );
                     self.optimizer.set_learning_rate(lr);
                 }
 

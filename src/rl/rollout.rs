@@ -227,7 +227,11 @@ pub fn gae(
         values.len() == rows && terminated.len() == rows && truncated.len() == rows,
         "GAE: rewards, values, terminated, truncated must have the same length ({rows})"
     );
-    anyhow::ensure!(last_values.len() == num_envs, "GAE: last_values has {} entries, expected {num_envs}", last_values.len());
+    anyhow::ensure!(
+        last_values.len() == num_envs,
+        "GAE: last_values has {} entries, expected {num_envs}",
+        last_values.len()
+    );
     let num_steps = rows / num_envs;
     let mut advantages = vec![0.0f32; rows];
     for (e, &last_value) in last_values.iter().enumerate() {
@@ -293,7 +297,8 @@ mod tests {
     /// delta_0 = 0 + 0.5*2 - 1 = 0;   A_0 = 0 + 0.25*1.5 = 0.375
     #[test]
     fn gae_matches_hand_computed_values_without_episode_end() {
-        let (adv, ret) = gae(&[0.0, 2.0, 1.0], &[1.0, 2.0, 3.0], &[false; 3], &[false; 3], &[4.0], 1, 0.5, 0.5).unwrap();
+        let (adv, ret) =
+            gae(&[0.0, 2.0, 1.0], &[1.0, 2.0, 3.0], &[false; 3], &[false; 3], &[4.0], 1, 0.5, 0.5).unwrap();
         close(&adv, &[0.375, 1.5, 0.0]);
         close(&ret, &[1.375, 3.5, 3.0]);
     }

@@ -92,7 +92,14 @@ impl ToyEnv {
 
 impl TrainEnv for ToyEnv {
     fn dims(&self) -> EnvDims {
-        EnvDims { obs: 3, privileged_obs: 6, history_len: HISTORY, act: 1, base_velocity_offset: 3, control_dt: f64::from(DT) }
+        EnvDims {
+            obs: 3,
+            privileged_obs: 6,
+            history_len: HISTORY,
+            act: 1,
+            base_velocity_offset: 3,
+            control_dt: f64::from(DT),
+        }
     }
     fn num_envs(&self) -> usize {
         self.x.len()

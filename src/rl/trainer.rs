@@ -27,8 +27,8 @@ use super::policy_dir::{load_training_checkpoint, save_policy, PolicyInfo};
 use super::ppo::{Metrics, PpoLearner};
 use crate::config::Config;
 use crate::util::write_atomic;
-use indicatif::{ProgressBar, ProgressStyle};
 use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
@@ -78,7 +78,13 @@ pub fn resume_seed(master: u64, iteration: usize) -> u64 {
 
 /// Trains a fresh agent on `env` for `config.ppo.iterations` iterations and
 /// writes the results into `out`. `progress`: show a progress bar on stderr.
-pub fn train(config: &Config, task: &str, env: &mut dyn TrainEnv, out: &Path, progress: bool) -> anyhow::Result<TrainSummary> {
+pub fn train(
+    config: &Config,
+    task: &str,
+    env: &mut dyn TrainEnv,
+    out: &Path,
+    progress: bool,
+) -> anyhow::Result<TrainSummary> {
     train_from(config, task, env, out, progress, None)
 }
 
@@ -109,7 +115,8 @@ pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Res
     );
     let path = dir.join("trainer.json");
     let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let state: TrainerState = serde_json::from_str(&text).with_context(|| format!("{}: not a trainer state", path.display()))?;
+    let state: TrainerState =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a trainer state", path.display()))?;
     anyhow::ensure!(
         state.iteration <= config.ppo.iterations,
         "{}: the checkpoint is at iteration {}, past the {} iterations asked for",
@@ -124,7 +131,13 @@ pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Res
 
 /// Writes `checkpoint/` as a whole: into `checkpoint.new/`, then renamed over
 /// the old one, so a crash leaves the previous checkpoint intact.
-fn save_checkpoint(learner: &PpoLearner, task: &str, info: &PolicyInfo, state: &TrainerState, out: &Path) -> anyhow::Result<()> {
+fn save_checkpoint(
+    learner: &PpoLearner,
+    task: &str,
+    info: &PolicyInfo,
+    state: &TrainerState,
+    out: &Path,
+) -> anyhow::Result<()> {
     let fresh = out.join("checkpoint.new");
     let old = out.join("checkpoint.old");
     let dir = out.join("checkpoint");
@@ -166,7 +179,8 @@ pub fn train_from(
             (PpoLearner::new(cfg.clone(), agent, env.num_envs(), learner_seed(config.seed))?, None, String::new())
         }
         Some((agent, state)) => {
-            let mut learner = PpoLearner::new(cfg.clone(), agent, env.num_envs(), resume_seed(config.seed, state.iteration))?;
+            let mut learner =
+                PpoLearner::new(cfg.clone(), agent, env.num_envs(), resume_seed(config.seed, state.iteration))?;
             learner.iteration = state.iteration;
             learner.optimizer.set_learning_rate(state.learning_rate);
             let path = out.join("metrics.jsonl");

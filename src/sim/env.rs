@@ -10,9 +10,9 @@
 //! observations. The env does not reset itself: the caller (or `VecEnv`)
 //! calls [`LocomotionEnv::reset_episode`] once a step says it is done.
 
+use super::episode::{EpisodeStats, Step};
 use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::physics::{PhysicsParams, RawState, RobotSim};
-use super::episode::{EpisodeStats, Step};
 use super::reward::{self, RewardInput};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
@@ -59,7 +59,12 @@ impl LocomotionEnv {
     }
 
     /// A new env sharing a robot description; `env_index` names it in errors.
-    pub fn with_shared_robot(cfg: &EnvConfig, robot: Arc<RobotModel>, task: &Perturbation, env_index: usize) -> anyhow::Result<Self> {
+    pub fn with_shared_robot(
+        cfg: &EnvConfig,
+        robot: Arc<RobotModel>,
+        task: &Perturbation,
+        env_index: usize,
+    ) -> anyhow::Result<Self> {
         cfg.validate()?;
         let default_q = default_pose(cfg, &robot);
         let soft_lower = std::array::from_fn(|i| soft_limit(&robot, cfg, i).0);
@@ -302,13 +307,15 @@ impl LocomotionEnv {
         self.history.copy_within(OBS_DIM.., 0);
         self.history[(HISTORY_LEN - 1) * OBS_DIM..].copy_from_slice(&self.obs);
 
-        let finished = (terminated || truncated).then(|| self.episode.summary(self.env_index, self.episode_step, dt, terminated));
+        let finished =
+            (terminated || truncated).then(|| self.episode.summary(self.env_index, self.episode_step, dt, terminated));
         Ok(Step { reward: step_reward, terms, terminated, truncated, finished })
     }
 
     fn resample_command(&mut self) {
         let c = &self.cfg;
-        self.command = [uniform(&mut self.rng, c.cmd_vx), uniform(&mut self.rng, c.cmd_vy), uniform(&mut self.rng, c.cmd_wz)];
+        self.command =
+            [uniform(&mut self.rng, c.cmd_vx), uniform(&mut self.rng, c.cmd_vy), uniform(&mut self.rng, c.cmd_wz)];
     }
 
     fn write_observations(&mut self) {

@@ -90,7 +90,8 @@ impl RobotSim {
     /// Builds the world: ground, robot at `cfg.start_height` in pose `q0`
     /// (12 joint angles), at rest; step, solver and gains from `cfg`.
     pub fn new(robot: &RobotModel, cfg: &EnvConfig, params: PhysicsParams, q0: &[f32; 12]) -> anyhow::Result<Self> {
-        let (dt, solver_iterations, height, kp, kd) = (cfg.physics_dt, cfg.solver_iterations, cfg.start_height, cfg.kp, cfg.kd);
+        let (dt, solver_iterations, height, kp, kd) =
+            (cfg.physics_dt, cfg.solver_iterations, cfg.start_height, cfg.kp, cfg.kd);
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(0.0, 0.0, -9.81);
         let ip = &mut world.integration_parameters;
@@ -103,7 +104,12 @@ impl RobotSim {
         let mut urdf = robot.urdf.clone();
         urdf.links[robot.trunk_link].inertial.mass.value += params.added_mass as f64;
         let trunk_mass = urdf.links[robot.trunk_link].inertial.mass.value;
-        anyhow::ensure!(trunk_mass > 0.0, "{}: trunk mass {trunk_mass} kg after adding {} kg (env.added_mass_range) must be > 0", robot.path.display(), params.added_mass);
+        anyhow::ensure!(
+            trunk_mass > 0.0,
+            "{}: trunk mass {trunk_mass} kg after adding {} kg (env.added_mass_range) must be > 0",
+            robot.path.display(),
+            params.added_mass
+        );
         let options = UrdfLoaderOptions {
             collider_blueprint: ColliderBuilder::default()
                 .density(0.0)
@@ -127,15 +133,13 @@ impl RobotSim {
         let mut joint_links = [0usize; 12];
         let mut multibody = None;
         for (i, leg_joint) in robot.joints.iter().enumerate() {
-            let k = joint_sources
-                .iter()
-                .position(|&s| s == leg_joint.urdf_joint)
-                .ok_or_else(|| anyhow::anyhow!("{}: joint '{}' was not built by the loader", robot.path.display(), leg_joint.name))?;
+            let k = joint_sources.iter().position(|&s| s == leg_joint.urdf_joint).ok_or_else(|| {
+                anyhow::anyhow!("{}: joint '{}' was not built by the loader", robot.path.display(), leg_joint.name)
+            })?;
             let body = handles.joints[k].link2;
-            let link = world
-                .multibody_joints
-                .rigid_body_link(body)
-                .ok_or_else(|| anyhow::anyhow!("{}: joint '{}' is not part of the multibody", robot.path.display(), leg_joint.name))?;
+            let link = world.multibody_joints.rigid_body_link(body).ok_or_else(|| {
+                anyhow::anyhow!("{}: joint '{}' is not part of the multibody", robot.path.display(), leg_joint.name)
+            })?;
             multibody = Some(link.multibody);
             joint_links[i] = link.id;
         }
@@ -367,8 +371,5 @@ pub const CONTACT_FORCE_THRESHOLD: f32 = 0.1;
 /// hovering ~2 cm above the ground, with zero impulse, counted as touching).
 pub fn touches(pair: &ContactPair, dt: f32) -> bool {
     pair.total_impulse_magnitude() > CONTACT_FORCE_THRESHOLD * dt
-        || pair
-            .solver_manifolds()
-            .iter()
-            .any(|m| m.data.solver_contacts.iter().any(|s| s.dist <= 0.0))
+        || pair.solver_manifolds().iter().any(|m| m.data.solver_contacts.iter().any(|s| s.dist <= 0.0))
 }

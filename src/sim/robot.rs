@@ -113,7 +113,8 @@ impl RobotModel {
 
     /// Reads and validates a URDF file. Errors name the file and the problem.
     pub fn load(path: &Path) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("reading robot description {}", path.display()))?;
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading robot description {}", path.display()))?;
         Self::from_urdf_str(&text, path).with_context(|| format!("in robot description {}", path.display()))
     }
 
@@ -132,7 +133,8 @@ impl RobotModel {
         for (leg, chain) in Leg::ALL.iter().zip(&legs) {
             for &j in chain {
                 let joint = &urdf.joints[j];
-                let (lower, upper, effort) = (joint.limit.lower as f32, joint.limit.upper as f32, joint.limit.effort as f32);
+                let (lower, upper, effort) =
+                    (joint.limit.lower as f32, joint.limit.upper as f32, joint.limit.effort as f32);
                 let bad = |what: &str, v: f32| anyhow!("joint '{}' has a bad {what}: {v}", joint.name);
                 if !lower.is_finite() {
                     return Err(bad("lower limit", lower));
@@ -163,7 +165,11 @@ impl RobotModel {
                 bail!("bad number: link '{}' has mass {m} (must be finite and >= 0)", link.name);
             }
             let i = &link.inertial.inertia;
-            if [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz].iter().any(|v| !v.is_finite()) || i.ixx < 0.0 || i.iyy < 0.0 || i.izz < 0.0 {
+            if [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz].iter().any(|v| !v.is_finite())
+                || i.ixx < 0.0
+                || i.iyy < 0.0
+                || i.izz < 0.0
+            {
                 bail!("bad number: link '{}' has inertia {:?}", link.name, [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz]);
             }
         }
@@ -172,7 +178,12 @@ impl RobotModel {
         }
         for joint in &urdf.joints {
             if joint.origin.xyz.0.iter().chain(joint.origin.rpy.0.iter()).any(|v| !v.is_finite()) {
-                bail!("bad number: joint '{}' has origin xyz {:?} rpy {:?}", joint.name, joint.origin.xyz.0, joint.origin.rpy.0);
+                bail!(
+                    "bad number: joint '{}' has origin xyz {:?} rpy {:?}",
+                    joint.name,
+                    joint.origin.xyz.0,
+                    joint.origin.rpy.0
+                );
             }
         }
         Ok(Self { path: path.to_path_buf(), urdf, trunk_link, joints, foot_offsets, foot_radius })
@@ -186,8 +197,8 @@ impl RobotModel {
 
 /// Attributes whose value is one or more numbers.
 const NUMERIC_ATTRIBUTES: [&str; 17] = [
-    "value", "xyz", "rpy", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "lower", "upper", "effort", "velocity", "radius", "length", "size",
-    "scale",
+    "value", "xyz", "rpy", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "lower", "upper", "effort", "velocity", "radius",
+    "length", "size", "scale",
 ];
 
 /// The first numeric attribute that does not parse, as "line N: name=\"value\"".
@@ -214,7 +225,10 @@ fn strip_meshes(urdf: &mut Robot, path: &Path) {
         let name = link.name.clone();
         link.collision.retain(|c| match &c.geometry {
             Geometry::Mesh { filename, .. } => {
-                tracing::warn!("{}: link '{name}': collision mesh '{filename}' skipped (meshes are not loaded)", path.display());
+                tracing::warn!(
+                    "{}: link '{name}': collision mesh '{filename}' skipped (meshes are not loaded)",
+                    path.display()
+                );
                 false
             }
             _ => true,
@@ -224,7 +238,10 @@ fn strip_meshes(urdf: &mut Robot, path: &Path) {
 }
 
 fn link_index(urdf: &Robot, name: &str) -> anyhow::Result<usize> {
-    urdf.links.iter().position(|l| l.name == name).ok_or_else(|| anyhow!("joint refers to link '{name}', which does not exist"))
+    urdf.links
+        .iter()
+        .position(|l| l.name == name)
+        .ok_or_else(|| anyhow!("joint refers to link '{name}', which does not exist"))
 }
 
 /// The unique link that is no joint's child; the joints must form a tree
@@ -236,7 +253,8 @@ fn find_root(urdf: &Robot) -> anyhow::Result<usize> {
         link_index(urdf, &joint.child.link).with_context(|| format!("joint '{}'", joint.name))?;
     }
     for link in &urdf.links {
-        let parents: Vec<&str> = urdf.joints.iter().filter(|j| j.child.link == link.name).map(|j| j.name.as_str()).collect();
+        let parents: Vec<&str> =
+            urdf.joints.iter().filter(|j| j.child.link == link.name).map(|j| j.name.as_str()).collect();
         if parents.len() > 1 {
             bail!("not a tree: link '{}' is the child of {} joints ({})", link.name, parents.len(), parents.join(", "));
         }
@@ -250,10 +268,18 @@ fn find_root(urdf: &Robot) -> anyhow::Result<usize> {
             let mut stack = vec![*root];
             while let Some(l) = stack.pop() {
                 reached[l] = true;
-                stack.extend(children(urdf, &urdf.links[l].name).map(|j| link_index(urdf, &urdf.joints[j].child.link)).collect::<anyhow::Result<Vec<_>>>()?);
+                stack.extend(
+                    children(urdf, &urdf.links[l].name)
+                        .map(|j| link_index(urdf, &urdf.joints[j].child.link))
+                        .collect::<anyhow::Result<Vec<_>>>()?,
+                );
             }
             match reached.iter().position(|r| !r) {
-                Some(l) => bail!("not a tree: link '{}' is not connected to the trunk '{}'", urdf.links[l].name, urdf.links[*root].name),
+                Some(l) => bail!(
+                    "not a tree: link '{}' is not connected to the trunk '{}'",
+                    urdf.links[l].name,
+                    urdf.links[*root].name
+                ),
                 None => Ok(*root),
             }
         }
@@ -272,7 +298,8 @@ fn children<'a>(urdf: &'a Robot, link: &'a str) -> impl Iterator<Item = usize> +
 
 /// The four leg chains (joint indices, hip first), ordered FL, FR, RL, RR.
 fn find_legs(urdf: &Robot, trunk: usize) -> anyhow::Result<[Vec<usize>; NUM_LEGS]> {
-    let revolute = urdf.joints.iter().filter(|j| matches!(j.joint_type, JointType::Revolute | JointType::Continuous)).count();
+    let revolute =
+        urdf.joints.iter().filter(|j| matches!(j.joint_type, JointType::Revolute | JointType::Continuous)).count();
     let mut legs: Vec<(f64, f64, Vec<usize>, String)> = Vec::new();
     // Walk each subtree hanging from the trunk, composing fixed-joint offsets
     // (translations only: enough to tell front from rear and left from right).
@@ -287,7 +314,10 @@ fn find_legs(urdf: &Robot, trunk: usize) -> anyhow::Result<[Vec<usize>; NUM_LEGS
                 let chain = leg_chain(urdf, j)?;
                 legs.push((pos[0], pos[1], chain, joint.name.clone()));
             }
-            other => bail!("not a quadruped tree: joint '{}' is {other:?}, only revolute and fixed joints are supported", joint.name),
+            other => bail!(
+                "not a quadruped tree: joint '{}' is {other:?}, only revolute and fixed joints are supported",
+                joint.name
+            ),
         }
     }
     if legs.len() != NUM_LEGS {
@@ -307,7 +337,10 @@ fn find_legs(urdf: &Robot, trunk: usize) -> anyhow::Result<[Vec<usize>; NUM_LEGS
             (false, false) => Leg::RR,
         };
         if !out[leg.index()].is_empty() {
-            bail!("not a quadruped tree: two legs in the {} quadrant (the second starts at joint '{name}', x={x}, y={y})", leg.name());
+            bail!(
+                "not a quadruped tree: two legs in the {} quadrant (the second starts at joint '{name}', x={x}, y={y})",
+                leg.name()
+            );
         }
         out[leg.index()] = chain;
     }
@@ -366,7 +399,8 @@ fn foot_of(urdf: &Robot, calf: usize) -> anyhow::Result<([f32; 3], f32)> {
             _ => None,
         })
     };
-    let fixed: Vec<usize> = children(urdf, calf_name).filter(|&j| urdf.joints[j].joint_type == JointType::Fixed).collect();
+    let fixed: Vec<usize> =
+        children(urdf, calf_name).filter(|&j| urdf.joints[j].joint_type == JointType::Fixed).collect();
     if let Some(&j) = fixed.first() {
         let o = urdf.joints[j].origin.xyz.0;
         let child = link_index(urdf, &urdf.joints[j].child.link)?;
@@ -375,7 +409,9 @@ fn foot_of(urdf: &Robot, calf: usize) -> anyhow::Result<([f32; 3], f32)> {
     }
     match sphere_on(calf) {
         Some((o, r)) => Ok(([o[0] as f32, o[1] as f32, o[2] as f32], r)),
-        None => bail!("calf link '{calf_name}' has neither a fixed foot link nor a sphere collision shape for the foot"),
+        None => {
+            bail!("calf link '{calf_name}' has neither a fixed foot link nor a sphere collision shape for the foot")
+        }
     }
 }
 

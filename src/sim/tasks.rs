@@ -113,8 +113,10 @@ impl FromStr for Perturbation {
         }
         let mut items = Vec::new();
         for part in text.split('+') {
-            let (kind, leg) =
-                part.trim().split_once(':').ok_or_else(|| anyhow!("unknown task part '{part}' in '{text}'; {}", valid_syntax()))?;
+            let (kind, leg) = part
+                .trim()
+                .split_once(':')
+                .ok_or_else(|| anyhow!("unknown task part '{part}' in '{text}'; {}", valid_syntax()))?;
             let kind = PerturbationKind::ALL
                 .into_iter()
                 .find(|k| k.name().eq_ignore_ascii_case(kind.trim()))

@@ -50,7 +50,13 @@ pub fn env_seed(seed: u64, index: usize) -> u64 {
 
 impl VecEnv {
     /// `num_envs` envs with the same task, env i reset with `env_seed(seed, i)`.
-    pub fn new(cfg: &EnvConfig, robot: &RobotModel, task: &Perturbation, num_envs: usize, seed: u64) -> anyhow::Result<Self> {
+    pub fn new(
+        cfg: &EnvConfig,
+        robot: &RobotModel,
+        task: &Perturbation,
+        num_envs: usize,
+        seed: u64,
+    ) -> anyhow::Result<Self> {
         if num_envs == 0 {
             bail!("a VecEnv needs at least one env");
         }

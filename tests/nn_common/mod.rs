@@ -20,7 +20,8 @@ pub fn tasks(n: usize, seed: u64) -> Vec<LinearTask> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..n)
         .map(|_| {
-            let a: Vec<f32> = (0..IN * OUT).map(|_| rng.sample::<f32, _>(StandardNormal) / (IN as f32).sqrt()).collect();
+            let a: Vec<f32> =
+                (0..IN * OUT).map(|_| rng.sample::<f32, _>(StandardNormal) / (IN as f32).sqrt()).collect();
             LinearTask { a: Tensor::from_vec(a, (OUT, IN), &Device::Cpu).unwrap() }
         })
         .collect()
@@ -44,7 +45,14 @@ pub fn small_mlp(cfg: &MaskConfig, seed: u64) -> MaskedMlp {
 }
 
 /// Trains `task` for `steps` iterations (begin_task .. end_task); returns the recall loss on a probe batch.
-pub fn train_task(net: &mut MaskedMlp, id: TaskId, task: &LinearTask, steps: usize, lr: f64, rng: &mut ChaCha8Rng) -> f32 {
+pub fn train_task(
+    net: &mut MaskedMlp,
+    id: TaskId,
+    task: &LinearTask,
+    steps: usize,
+    lr: f64,
+    rng: &mut ChaCha8Rng,
+) -> f32 {
     net.begin_task(id, &[]).unwrap();
     let mut opt = MaskedAdam::new(AdamConfig { learning_rate: lr, ..AdamConfig::default() });
     for it in 0..steps {
