@@ -3,13 +3,15 @@
 //! every task (see `engine::run_dir`), `--resume` from the last completed task.
 //! The progress bar and the log are observers of the session's events.
 
-use crate::engine::learner::Learner;
-use crate::engine::run_config::{LearnerKind, RunConfig};
-use crate::engine::run_dir::{MetricsFile, RunDir, RUN_FILE};
-use crate::engine::toy_learner::ToyLearner;
+use crate::engine::Learner;
+use crate::engine::ToyLearner;
 use crate::engine::{Event, Observer, Session, StepOutcome};
+use crate::engine::{LearnerKind, RunConfig};
+use crate::engine::{MetricsFile, RunDir, RUN_FILE};
+use crate::rl::Metrics;
+use crate::rl::{iteration_summary, progress_bar};
 use anyhow::Context;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -25,7 +27,7 @@ pub fn make_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<St
             };
             Ok((Box::new(learner), learned))
         }
-        LearnerKind::Ppo => crate::engine::ppo_learner::make(cfg),
+        LearnerKind::Ppo => crate::engine::make_ppo_learner(cfg),
     }
 }
 
@@ -52,7 +54,7 @@ impl Observer for LogObserver {
             Event::MaskStats { .. } => return,
             Event::Evaluated { after_step, evaluation: e } => format!(
                 "after step {after_step}: {} performance {:.4} return {:.3} lin_vel_err {:.3} ang_vel_err {:.3} fall_rate {:.3}",
-                e.task, e.performance, e.mean_return, e.lin_vel_err, e.ang_vel_err, e.fall_rate
+                e.report.task, e.performance, e.report.mean_return, e.report.lin_vel_err, e.report.ang_vel_err, e.report.fall_rate
             ),
             other => serde_json::to_string(other).unwrap_or_default(),
         };
@@ -67,28 +69,9 @@ impl Observer for LogObserver {
 }
 
 /// The echo line of iteration `iteration` (1-based) of `iterations`:
-/// `step 0 iteration 25/500: return 3.21 lin_vel_err 0.41 ang_vel_err 0.62 fall_rate 0.20 SPS 3300`
-/// (`-` for a figure the iteration did not report, e.g. before any episode ended).
-fn iteration_line(
-    step: usize,
-    iteration: usize,
-    iterations: usize,
-    metrics: &crate::engine::learner::Metrics,
-) -> String {
-    let mut line = format!("step {step} iteration {iteration}/{iterations}:");
-    for (label, key, digits) in [
-        ("return", "charts/episodic_return", 2),
-        ("lin_vel_err", "charts/lin_vel_err", 3),
-        ("ang_vel_err", "charts/ang_vel_err", 3),
-        ("fall_rate", "charts/fall_rate", 2),
-        ("SPS", "charts/SPS", 0),
-    ] {
-        match metrics.get(key) {
-            Some(v) => line.push_str(&format!(" {label} {v:.digits$}")),
-            None => line.push_str(&format!(" {label} -")),
-        }
-    }
-    line
+/// `step 0 iteration 25/500: return 3.21 lin_vel_err 0.410 ...` (see [`iteration_summary`]).
+fn iteration_line(step: usize, iteration: usize, iterations: usize, metrics: &Metrics) -> String {
+    format!("step {step} iteration {iteration}/{iterations}: {}", iteration_summary(metrics))
 }
 
 /// A progress bar over every iteration of the sequence.
@@ -102,9 +85,7 @@ impl Observer for ProgressObserver {
             Event::TaskStarted { step, name, .. } => self.bar.set_prefix(format!("step {step} {name}")),
             Event::Iteration { metrics, .. } => {
                 self.bar.inc(1);
-                if let Some(p) = metrics.get("charts/performance") {
-                    self.bar.set_message(format!("performance {p:.3}"));
-                }
+                self.bar.set_message(iteration_summary(metrics));
             }
             Event::SequenceFinished { .. } => self.bar.finish(),
             _ => {}
@@ -154,7 +135,7 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
     };
     let reference_curve = |name: &str| reference.as_ref().and_then(|r| r.reference_curve(name));
     let (learner, learned) = make_learner(&cfg)?;
-    let method = crate::cl::method::method_by_name(&cfg.method)?;
+    let method = crate::cl::method_by_name(&cfg.method)?;
     let mut session = Session::new(
         learner,
         method,
@@ -181,12 +162,7 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
     session.add_observer(Box::new(LogObserver { lines: lines.clone(), echo: !progress }));
     let total_iterations: usize = (0..total_steps).map(|i| cfg.sequence.iterations_of(i)).sum();
     let done_iterations: usize = (0..session.completed_steps()).map(|i| cfg.sequence.iterations_of(i)).sum();
-    let bar = if progress { ProgressBar::new(total_iterations as u64) } else { ProgressBar::hidden() };
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} {prefix} [{bar:30}] {pos}/{len} it  eta {eta}  {msg}")
-            .expect("a valid progress template")
-            .progress_chars("=> "),
-    );
+    let bar = progress_bar(total_iterations, progress);
     bar.set_position(done_iterations as u64);
     session.add_observer(Box::new(ProgressObserver { bar }));
 

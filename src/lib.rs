@@ -2,26 +2,33 @@
 //! simulated quadruped (Gai et al., "Continual Reinforcement Learning for
 //! Quadruped Robot Locomotion", Entropy 2024).
 //!
-//! The map of the crate:
+//! The map of the crate, lowest layer first. A module may import only the
+//! layers its row names (`tests/layering.rs` checks the code against this table):
 //!
 //! | module | what it is for | may import |
 //! | --- | --- | --- |
-//! | [`config`] | every hyperparameter, with doc comments and defaults, loadable from TOML | serde only |
-//! | [`sim`] | the Rapier quadruped: URDF loading, PD motors, `LocomotionEnv`, task perturbations, a parallel batch of envs | `config` |
-//! | [`nn`] | masked networks in candle: `MaskedLinear`, `MaskedMlp`, the masked Adam, checkpoints | `config` |
-//! | [`rl`] | PPO with a privileged critic and a context estimator (CENet), rollouts, GAE, observation normalisation | `config`, `sim`, `nn` |
-//! | [`cl`] | continual learning around the learner: sequences, the continual measures | `config`, `sim`, `nn`, `rl` |
-//! | [`engine`] | the continual-learning engine: a `Session` trains a learner on a sequence step by step and emits events | `config`, `nn`, `rl`, `cl` |
-//! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `engine` |
-//! | [`bench`] | the throughput figures printed by `quadcl bench` | everything |
-//! | [`cmd`] | one file per CLI subcommand, thin glue over the modules above | everything |
+//! | [`util`] | atomic writes, content hashes, every random stream's seed | nothing of the crate |
+//! | [`config`] | every hyperparameter, with doc comments and defaults, loadable from TOML | nothing of the crate |
+//! | [`sim`] | the Rapier quadruped: URDF loading, PD motors, `LocomotionEnv`, task perturbations, a parallel batch of envs | `config`, `util` |
+//! | [`nn`] | masked networks in candle: `MaskedLinear`, `MaskedMlp`, the masked Adam, checkpoints, mask statistics | `config`, `util` |
+//! | [`rl`] | PPO with a privileged critic and a context estimator (CENet), rollouts, GAE, normalisation, evaluation, policy directories, metric names and progress | `config`, `util`, `sim`, `nn` |
+//! | [`cl`] | continual learning around the learner: the method's hooks and switches, sequences, the continual measures | `config`, `util`, `sim`, `nn`, `rl` |
+//! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl` |
+//! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine` |
 //!
-//! `sim` never imports `nn`; `nn` never imports `sim`.
+//! `engine` imports `sim` for what only a simulator-backed learner needs (the
+//! task perturbations it trains on, the shifted environments of sim-to-real
+//! fine-tuning). `sim` never imports `nn`; `nn` never imports `sim`.
+//!
+//! The binary `quadcl` (`src/main.rs`) adds, outside this library:
+//!
+//! | module | what it is for | may import |
+//! | --- | --- | --- |
+//! | `cli` | the clap command line and its dispatch | `cmd` (and the library) |
+//! | `cmd` | one file per subcommand, thin glue over the library | `bench` (and the library) |
+//! | `bench` | the throughput figures printed by `quadcl bench` | the library |
 
-pub mod bench;
 pub mod cl;
-pub mod cli;
-pub mod cmd;
 pub mod config;
 pub mod engine;
 pub mod headless;

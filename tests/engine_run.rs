@@ -3,7 +3,7 @@
 //! uninterrupted run, and a corrupt checkpoint or config is a clear error
 //! that leaves the existing results intact.
 
-use quadcl::engine::run_dir::MetricsFile;
+use quadcl::engine::MetricsFile;
 use quadcl::headless::{run, RunOptions};
 use std::path::{Path, PathBuf};
 

@@ -2,8 +2,8 @@
 //! default sequence is the twelve single-leg tasks, once each; the Figure 11
 //! runs differ only in the mixed task's initialisation.
 
-use quadcl::cl::sequence::TransferInit;
-use quadcl::engine::run_config::RunConfig;
+use quadcl::cl::TransferInit;
+use quadcl::engine::RunConfig;
 use std::path::Path;
 
 fn scene(name: &str) -> RunConfig {

@@ -2,10 +2,10 @@
 //! inside and between tasks, switch changes that apply to the next task only,
 //! commands from an observer, and exact recall (forgetting 0 for `ours`).
 
-use quadcl::cl::ours::{LambdaMode, Ours, SwitchOverrides, Switches};
-use quadcl::cl::sequence::Sequence;
+use quadcl::cl::Sequence;
+use quadcl::cl::{LambdaMode, Ours, SwitchOverrides, Switches};
 use quadcl::config::net::MaskConfig;
-use quadcl::engine::toy_learner::ToyLearner;
+use quadcl::engine::ToyLearner;
 use quadcl::engine::{Command, CommandSender, Event, EventLog, Observer, Session, StepOutcome};
 
 fn sequence(text: &str) -> Sequence {
@@ -129,13 +129,13 @@ fn ours_forgets_nothing_and_recall_is_bit_identical_after_later_tasks() {
     let r = s.results().clone();
     assert_eq!(r.eval_matrix.forgetting(), Some(0.0));
     for j in 0..2 {
-        let right_after = r.evaluations[j].iter().find(|e| e.task == r.tasks[j]).unwrap();
-        let at_end = r.evaluations[2].iter().find(|e| e.task == r.tasks[j]).unwrap();
+        let right_after = r.evaluations[j].iter().find(|e| e.report.task == r.tasks[j]).unwrap();
+        let at_end = r.evaluations[2].iter().find(|e| e.report.task == r.tasks[j]).unwrap();
         assert_eq!(right_after, at_end, "task {j}");
     }
     // And evaluating on demand gives the same numbers again.
     let again = s.evaluate(0).unwrap();
-    assert_eq!(&again, r.evaluations[2].iter().find(|e| e.task == r.tasks[0]).unwrap());
+    assert_eq!(&again, r.evaluations[2].iter().find(|e| e.report.task == r.tasks[0]).unwrap());
     assert!(s.evaluate(5).is_err());
 }
 
@@ -145,9 +145,9 @@ fn a_repeated_task_fine_tunes_without_touching_the_others() {
     s.run(&mut |_| Ok(())).unwrap();
     let r = s.results();
     assert_eq!(r.tasks.len(), 2);
-    assert!(r.steps[2].fine_tune && !r.steps[1].fine_tune);
-    let invert_before = r.evaluations[1].iter().find(|e| e.task == "invert:RR").unwrap();
-    let invert_after = r.evaluations[2].iter().find(|e| e.task == "invert:RR").unwrap();
+    assert!(r.steps[2].repeat && !r.steps[1].repeat);
+    let invert_before = r.evaluations[1].iter().find(|e| e.report.task == "invert:RR").unwrap();
+    let invert_after = r.evaluations[2].iter().find(|e| e.report.task == "invert:RR").unwrap();
     assert_eq!(invert_before, invert_after);
 }
 
@@ -177,10 +177,10 @@ fn the_toy_learner_learns_within_a_task() {
 #[test]
 fn a_transfer_change_applies_to_the_next_task_only() {
     let mut s = session(THREE);
-    let err = s.set_next_transfer(vec!["invert:RR".into()], quadcl::cl::sequence::TransferInit::Related).unwrap_err();
+    let err = s.set_next_transfer(vec!["invert:RR".into()], quadcl::cl::TransferInit::Related).unwrap_err();
     assert!(err.to_string().contains("not been learned"), "{err}");
     s.train_next_task().unwrap();
-    s.set_next_transfer(vec!["crash:FL".into()], quadcl::cl::sequence::TransferInit::Related).unwrap();
+    s.set_next_transfer(vec!["crash:FL".into()], quadcl::cl::TransferInit::Related).unwrap();
     s.run(&mut |_| Ok(())).unwrap();
     let steps = &s.results().steps;
     assert_eq!(steps[1].related, vec![0]);

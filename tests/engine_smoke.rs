@@ -17,7 +17,7 @@ fn smoke_run_forgets_nothing_and_recalls_every_task_bit_for_bit() {
     let out = tmp.path().join("smoke");
     let m = run(&smoke(), &out, RunOptions::default()).unwrap();
     assert_eq!(m.completed_steps, 3);
-    assert_eq!(m.forgetting, Some(0.0));
+    assert_eq!(m.summary.forgetting, Some(0.0));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
     for key in [
@@ -34,8 +34,8 @@ fn smoke_run_forgets_nothing_and_recalls_every_task_bit_for_bit() {
         assert!(json.get(key).is_some(), "metrics.json has no {key}");
     }
     for (j, name) in m.tasks.iter().enumerate().take(2) {
-        let right_after = m.evaluations[j].iter().find(|e| &e.task == name).unwrap();
-        let at_end = m.evaluations[2].iter().find(|e| &e.task == name).unwrap();
+        let right_after = m.evaluations[j].iter().find(|e| &e.report.task == name).unwrap();
+        let at_end = m.evaluations[2].iter().find(|e| &e.report.task == name).unwrap();
         assert_eq!(right_after, at_end, "{name}");
     }
     for curve in &m.curves {
@@ -52,7 +52,7 @@ fn smoke_run_forgets_nothing_and_recalls_every_task_bit_for_bit() {
     assert_eq!(quadcl::rl::load_policy(&first, None).unwrap().agent.task, 0, "its last learned task");
     let err = format!("{:#}", quadcl::rl::load_policy(&first, Some("noise:FR")).unwrap_err());
     assert!(err.contains("step-00-crash_FL") && err.contains("not learned yet") && err.contains("crash:FL"), "{err}");
-    let zero_shot = quadcl::rl::policy_dir::load_for_task(&first, "noise:FR").unwrap();
+    let zero_shot = quadcl::rl::load_for_task(&first, "noise:FR").unwrap();
     assert_eq!(zero_shot.agent.task, 0, "eval on a task to come runs the last learned one");
 
     let parts = tmp.path().join("parts");
@@ -64,17 +64,13 @@ fn smoke_run_forgets_nothing_and_recalls_every_task_bit_for_bit() {
 #[test]
 fn a_sequence_starts_from_a_base_policy_and_keeps_its_task() {
     let tmp = tempfile::tempdir().unwrap();
-    let smoke_cfg = quadcl::engine::run_config::RunConfig::load(&smoke()).unwrap();
+    let smoke_cfg = quadcl::engine::RunConfig::load(&smoke()).unwrap();
     let mut base_cfg = smoke_cfg.config.clone();
     base_cfg.ppo.iterations = 2;
     let base = tmp.path().join("base");
-    let mut env = quadcl::rl::sim_env::SimTrainEnv::new(
-        &base_cfg.env,
-        &quadcl::sim::Perturbation::none(),
-        base_cfg.ppo.num_envs,
-        1,
-    )
-    .unwrap();
+    let mut env =
+        quadcl::rl::SimTrainEnv::new(&base_cfg.env, &quadcl::sim::Perturbation::none(), base_cfg.ppo.num_envs, 1)
+            .unwrap();
     quadcl::rl::train(&base_cfg, "none", &mut env, &base, false).unwrap();
 
     let text = std::fs::read_to_string(smoke())
@@ -87,7 +83,7 @@ fn a_sequence_starts_from_a_base_policy_and_keeps_its_task() {
     assert_eq!(m.tasks.len(), 4);
     assert_eq!(m.steps[0].task, 1, "the sequence's first task gets the next id");
     let base_evals: Vec<_> =
-        m.evaluations.iter().map(|row| row.iter().find(|e| e.task == "none").unwrap().clone()).collect();
+        m.evaluations.iter().map(|row| row.iter().find(|e| e.report.task == "none").unwrap().clone()).collect();
     assert_eq!(base_evals.len(), 2);
     assert_eq!(base_evals[0], base_evals[1], "the base task is recalled bit for bit");
 }

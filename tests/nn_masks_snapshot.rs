@@ -4,9 +4,8 @@
 
 mod nn_common;
 use nn_common::*;
-use quadcl::cmd::masks::{render, MasksArgs};
 use quadcl::nn::checkpoint::save_policy;
-use quadcl::nn::{AdamConfig, MaskConfig, MaskedAdam};
+use quadcl::nn::{AdamConfig, MaskConfig, MaskReport, MaskedAdam};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
@@ -39,7 +38,7 @@ fn policy_dir() -> tempfile::TempDir {
 #[test]
 fn masks_json_of_a_fixed_seed_sequence() {
     let dir = policy_dir();
-    let json = render(&MasksArgs { policy: dir.path().to_path_buf(), json: true }).unwrap();
+    let json = serde_json::to_string_pretty(&MaskReport::of_policy(dir.path()).unwrap()).unwrap();
     let value: serde_json::Value = serde_json::from_str(&json).unwrap();
     // Structural facts that do not depend on the numbers.
     let layer = &value["networks"][0]["layers"][0];
@@ -53,7 +52,7 @@ fn masks_json_of_a_fixed_seed_sequence() {
 #[test]
 fn masks_table_lists_every_layer_and_task() {
     let dir = policy_dir();
-    let table = render(&MasksArgs { policy: dir.path().to_path_buf(), json: false }).unwrap();
+    let table = MaskReport::of_policy(dir.path()).unwrap().to_table();
     for needle in ["actor.l0 [16 x 8]", "actor.l1 [4 x 16]", "crash:FL", "invert:RR", "from_vacant"] {
         assert!(table.contains(needle), "missing {needle:?} in\n{table}");
     }

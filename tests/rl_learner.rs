@@ -3,7 +3,7 @@
 
 mod rl_common;
 use quadcl::config::Config;
-use quadcl::rl::toy_env::ToyEnv;
+use quadcl::rl::ToyEnv;
 use quadcl::rl::{Agent, PpoLearner, TrainEnv};
 use rl_common::small_ppo_config;
 
@@ -66,7 +66,7 @@ fn same_seed_gives_the_same_training_curve() {
 
 /// Largest |action mean| of a fresh agent (task 0 begun) on the standing robot's observations.
 fn fresh_action_means_max(ppo: quadcl::config::PpoConfig) -> f32 {
-    use quadcl::rl::sim_env::SimTrainEnv;
+    use quadcl::rl::SimTrainEnv;
     use rand::SeedableRng;
     let cfg = quadcl::config::Config { ppo, ..quadcl::config::Config::default() };
     let env = SimTrainEnv::new(&cfg.env, &quadcl::sim::Perturbation::none(), 8, 1).unwrap();

@@ -6,9 +6,10 @@
 use candle_core::Tensor;
 use quadcl::config::{Config, PpoConfig};
 use quadcl::nn::ElementState;
-use quadcl::rl::policy_dir::load_policy;
-use quadcl::rl::toy_env::ToyEnv;
-use quadcl::rl::trainer::{load_resume_point, resume_seed, train_from};
+use quadcl::rl::load_policy;
+use quadcl::rl::ToyEnv;
+use quadcl::rl::{load_resume_point, train_from};
+use quadcl::util::{derive_seed, Stream};
 
 fn toy_config(iterations: usize) -> Config {
     let mut cfg = Config {
@@ -38,7 +39,7 @@ fn metric_rows(dir: &std::path::Path) -> Vec<serde_json::Value> {
 /// Resumes the run in `dir` with `cfg` and trains it to `cfg.ppo.iterations`.
 fn resume(cfg: &Config, dir: &std::path::Path) -> quadcl::rl::TrainSummary {
     let (agent, state) = load_resume_point(cfg, "none", dir).unwrap();
-    let mut env = ToyEnv::new(16, 10, resume_seed(cfg.seed, state.iteration));
+    let mut env = ToyEnv::new(16, 10, derive_seed(cfg.seed, Stream::Trainer(state.iteration)));
     train_from(cfg, "none", &mut env, dir, false, Some((agent, state))).unwrap()
 }
 
@@ -57,7 +58,7 @@ fn a_resumed_run_goes_on_from_its_last_checkpoint() {
     let (agent, state) = load_resume_point(&longer, "none", dir.path()).unwrap();
     assert_eq!(state.iteration, 4);
     assert!(!agent.recall && agent.actor.current_task() == Some(0), "the task must still be in training");
-    let mut env = ToyEnv::new(16, 10, resume_seed(longer.seed, state.iteration));
+    let mut env = ToyEnv::new(16, 10, derive_seed(longer.seed, Stream::Trainer(state.iteration)));
     let summary = train_from(&longer, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
     assert_eq!(summary.iterations, 8);
 
@@ -90,8 +91,7 @@ fn resuming_with_another_config_or_task_is_an_error_that_changes_nothing() {
     assert!(err.contains("trainer.json"), "{err}");
     assert_eq!(std::fs::read(dir.path().join("checkpoint").join("model.safetensors")).unwrap(), snapshot);
 
-    let finished =
-        format!("{:#}", quadcl::rl::policy_dir::load_training_checkpoint(&dir.path().join("policy")).unwrap_err());
+    let finished = format!("{:#}", quadcl::rl::load_training_checkpoint(&dir.path().join("policy")).unwrap_err());
     assert!(finished.contains("not a checkpoint of a run in progress"), "{finished}");
 }
 
@@ -142,7 +142,7 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
     resume(&shared, dir.path());
     let ended = load_policy(&dir.path().join("policy"), None).unwrap();
 
-    let private = |p: &quadcl::rl::policy_dir::LoadedPolicy| -> usize {
+    let private = |p: &quadcl::rl::LoadedPolicy| -> usize {
         p.agent
             .networks()
             .iter()
@@ -154,7 +154,7 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
     assert_eq!(private(&ended), 0);
     let x =
         Tensor::ones((3, first.agent.actor.sizes()[0]), candle_core::DType::F32, &candle_core::Device::Cpu).unwrap();
-    let out = |p: &quadcl::rl::policy_dir::LoadedPolicy| {
+    let out = |p: &quadcl::rl::LoadedPolicy| {
         p.agent.actor.forward_task(0, &x).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap()
     };
     assert_eq!(out(&first), out(&ended), "the task's recall is unchanged");

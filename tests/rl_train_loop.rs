@@ -3,9 +3,9 @@
 
 mod rl_common;
 use quadcl::config::Config;
-use quadcl::rl::policy_dir::{load_policy, save_policy};
-use quadcl::rl::toy_env::ToyEnv;
+use quadcl::rl::ToyEnv;
 use quadcl::rl::{evaluate, train, Agent, TrainEnv};
+use quadcl::rl::{load_policy, save_policy};
 use rl_common::small_ppo_config;
 
 fn toy_config(iterations: usize) -> Config {

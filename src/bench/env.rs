@@ -9,8 +9,8 @@
 //! `env_physics_steps_per_s_1t`, and `env_control_steps_per_s_1t_dt0005_x4`
 //! (one env at MuJoCo's reference step 0.005 s x 4, to compare like with like).
 
-use crate::config::EnvConfig;
-use crate::sim::{LocomotionEnv, Perturbation, RobotModel, VecEnv, ACT_DIM};
+use quadcl::config::EnvConfig;
+use quadcl::sim::{LocomotionEnv, Perturbation, RobotModel, VecEnv, ACT_DIM};
 use rand::{Rng, SeedableRng};
 use serde_json::json;
 use std::time::Instant;

@@ -13,9 +13,9 @@
 //! (forward_task of a finished task, no gradient: rollouts and evaluation),
 //! and `nn_threads`.
 
-use crate::nn::fused::fused_mlp;
-use crate::nn::{Activation, AdamConfig, MaskConfig, MaskedAdam, MaskedMlp, Param};
 use candle_core::{Device, Tensor, Var};
+use quadcl::nn::fused_mlp;
+use quadcl::nn::{Activation, AdamConfig, MaskConfig, MaskedAdam, MaskedMlp, Param};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;

@@ -2,8 +2,8 @@
 //! (Avalanche's plugins, Continual World's `sac.py` hooks): each hook does
 //! nothing by default. `ours` needs only [`ContinualMethod::task_mask_config`]
 //! (everything else happens in the masked networks); a baseline such as EWC
-//! would add a penalty ([`ContinualMethod::extra_loss_weight`] and its own
-//! state) and compute importances in [`ContinualMethod::on_task_end`].
+//! will add a penalty (a loss hook and its own state, not here yet) and
+//! compute importances in [`ContinualMethod::on_task_end`].
 
 use super::ours::{Ours, Switches};
 use crate::config::net::MaskConfig;
@@ -26,7 +26,7 @@ pub trait ContinualMethod: Send {
     }
 
     /// Called after every training iteration with its metrics.
-    fn after_iteration(&mut self, _task: TaskId, _metrics: &crate::engine::learner::Metrics) -> anyhow::Result<()> {
+    fn after_iteration(&mut self, _task: TaskId, _metrics: &crate::rl::Metrics) -> anyhow::Result<()> {
         Ok(())
     }
 

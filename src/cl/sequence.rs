@@ -14,7 +14,7 @@
 //! reinit = false
 //! ```
 //!
-//! A task name may come back later in the sequence: it is then fine-tuned on
+//! A task name may come back later in the sequence: it is then a repeat, trained on
 //! its private parameters only (METHOD.md 2.5).
 
 use super::ours::SwitchOverrides;

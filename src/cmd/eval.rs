@@ -4,9 +4,9 @@
 //! by default) and the training config's randomisation and pushes (`--no-pushes`
 //! turns the pushes off); prints mean return, tracking errors, fall rate, survival.
 
-use crate::rl::sim_env::SimTrainEnv;
-use crate::sim::Perturbation;
 use clap::Args;
+use quadcl::rl::SimTrainEnv;
+use quadcl::sim::Perturbation;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -38,7 +38,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let task: Perturbation = args.task.parse()?;
     // A policy trained on several tasks recalls the one asked for; a single-task
     // policy (the base policy) is evaluated on any perturbation.
-    let loaded = crate::rl::policy_dir::load_for_task(&args.policy, &task.to_string())?;
+    let loaded = quadcl::rl::load_for_task(&args.policy, &task.to_string())?;
     let agent = &loaded.agent;
     let mut env_cfg = loaded.info.config.env.clone();
     if args.no_pushes {
@@ -48,7 +48,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let mut env = SimTrainEnv::new(env_cfg, &task, args.episodes, args.seed)?;
     // An episode lasts at most `episode_s`; allow a margin.
     let max_steps = (f64::from(env_cfg.episode_s) / f64::from(env_cfg.policy_dt())).ceil() as usize + 10;
-    let report = crate::rl::evaluate(agent, &mut env, &task.to_string(), args.seed, max_steps)?;
+    let report = quadcl::rl::evaluate(agent, &mut env, &task.to_string(), args.seed, max_steps)?;
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {

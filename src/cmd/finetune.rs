@@ -1,10 +1,10 @@
 //! `quadcl finetune --policy DIR --task TASK --shift FILE --out DIR`:
 //! sim-to-real fine-tuning of one learned task (METHOD.md 2.7, see
-//! `engine::finetune`). Prints the task's evaluation before and after, and
+//! `engine::sim2real`). Prints the task's evaluation before and after, and
 //! checks that no other task changed.
 
-use crate::engine::shift::Shift;
 use clap::Args;
+use quadcl::engine::Shift;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -38,7 +38,7 @@ pub fn run(args: FinetuneArgs) -> anyhow::Result<()> {
     if let Some(n) = args.iterations {
         shift.iterations = n;
     }
-    let r = crate::engine::finetune::finetune(
+    let r = quadcl::engine::sim2real(
         &args.policy,
         &args.task,
         &shift,
@@ -47,11 +47,17 @@ pub fn run(args: FinetuneArgs) -> anyhow::Result<()> {
         args.episodes,
         std::io::stderr().is_terminal(),
     )?;
-    let find = |v: &[crate::engine::Evaluation]| v.iter().find(|e| e.task == r.task).cloned();
+    let find = |v: &[quadcl::engine::Evaluation]| v.iter().find(|e| e.report.task == r.task).cloned();
     if let (Some(b), Some(a)) = (find(&r.before), find(&r.after)) {
         println!(
             "{}: performance {:.4} -> {:.4}, lin_vel_err {:.3} -> {:.3}, fall_rate {:.3} -> {:.3}",
-            r.task, b.performance, a.performance, b.lin_vel_err, a.lin_vel_err, b.fall_rate, a.fall_rate
+            r.task,
+            b.performance,
+            a.performance,
+            b.report.lin_vel_err,
+            a.report.lin_vel_err,
+            b.report.fall_rate,
+            a.report.fall_rate
         );
     }
     anyhow::ensure!(

@@ -3,10 +3,10 @@
 //! physics) and prints its contact pattern: duty factors, touchdowns per
 //! second, which feet move together and the gait they name (`rl::gait`).
 
-use crate::rl::gait::{record, GaitReport};
-use crate::rl::sim_env::load_robot;
-use crate::sim::Perturbation;
 use clap::Args;
+use quadcl::rl::{record_gait, GaitReport};
+use quadcl::sim::Perturbation;
+use quadcl::sim::RobotModel;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -37,10 +37,11 @@ pub struct GaitArgs {
 pub fn run(args: GaitArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.seconds > 0.0 && args.seconds.is_finite(), "--seconds must be > 0, got {}", args.seconds);
     let task: Perturbation = args.task.parse()?;
-    let loaded = crate::rl::policy_dir::load_for_task(&args.policy, &task.to_string())?;
+    let loaded = quadcl::rl::load_for_task(&args.policy, &task.to_string())?;
     let env_cfg = &loaded.info.config.env;
-    let robot = load_robot(env_cfg)?;
-    let report = record(&loaded.agent, env_cfg, &robot, &task, [args.vx, 0.0, args.wz], 2.0, args.seconds, args.seed)?;
+    let robot = RobotModel::for_config(env_cfg)?;
+    let report =
+        record_gait(&loaded.agent, env_cfg, &robot, &task, [args.vx, 0.0, args.wz], 2.0, args.seconds, args.seed)?;
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {

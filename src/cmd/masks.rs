@@ -1,9 +1,8 @@
 //! `quadcl masks`: per network, layer and task, which parameters are used
-//! (the JSON shape is documented in [`crate::nn::stats`]).
+//! (the JSON shape is documented on [`quadcl::nn::MaskReport`]).
 
-use crate::nn::checkpoint::load_policy;
-use crate::nn::stats::mask_report;
 use clap::Args;
+use quadcl::nn::MaskReport;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -24,8 +23,6 @@ pub fn run(args: MasksArgs) -> anyhow::Result<()> {
 
 /// The text `quadcl masks` prints (JSON or table).
 pub fn render(args: &MasksArgs) -> anyhow::Result<String> {
-    let policy = load_policy(&args.policy)?;
-    let nets: Vec<_> = policy.networks.iter().collect();
-    let report = mask_report(&policy.tasks, &nets);
+    let report = MaskReport::of_policy(&args.policy)?;
     Ok(if args.json { serde_json::to_string_pretty(&report)? } else { report.to_table() })
 }

@@ -22,10 +22,10 @@ pub struct RunArgs {
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
-    let m = crate::headless::run(
+    let m = quadcl::headless::run(
         &args.config,
         &args.out,
-        crate::headless::RunOptions {
+        quadcl::headless::RunOptions {
             resume: args.resume,
             progress: std::io::stderr().is_terminal(),
             stop_after: args.stop_after,
@@ -37,10 +37,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         m.completed_steps,
         m.total_steps,
         m.method,
-        show(m.average_performance),
-        show(m.forgetting),
-        show(m.plasticity),
-        show(m.forward_transfer_mean),
+        show(m.summary.average_performance),
+        show(m.summary.forgetting),
+        show(m.summary.plasticity),
+        show(m.summary.forward_transfer_mean),
         args.out.display()
     );
     Ok(())

@@ -2,10 +2,10 @@
 //! the unperturbed robot) with PPO + CENet and writes `config.toml`,
 //! `metrics.jsonl`, `summary.json` and `policy/` into DIR.
 
-use crate::config::Config;
-use crate::rl::sim_env::SimTrainEnv;
-use crate::sim::Perturbation;
 use clap::Args;
+use quadcl::config::Config;
+use quadcl::rl::SimTrainEnv;
+use quadcl::sim::Perturbation;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -42,15 +42,14 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     }
     let task: Perturbation = args.task.parse()?;
     let task_name = task.to_string();
-    let resume =
-        if args.resume { Some(crate::rl::trainer::load_resume_point(&config, &task_name, &args.out)?) } else { None };
+    let resume = if args.resume { Some(quadcl::rl::load_resume_point(&config, &task_name, &args.out)?) } else { None };
     let env_seed = match &resume {
-        Some((_, state)) => crate::rl::trainer::resume_seed(config.seed, state.iteration),
+        Some((_, state)) => quadcl::util::derive_seed(config.seed, quadcl::util::Stream::Trainer(state.iteration)),
         None => config.seed,
     };
     let mut env = SimTrainEnv::new(&config.env, &task, config.ppo.num_envs, env_seed)?;
     let progress = std::io::stderr().is_terminal();
-    let summary = crate::rl::trainer::train_from(&config, &task_name, &mut env, &args.out, progress, resume)?;
+    let summary = quadcl::rl::train_from(&config, &task_name, &mut env, &args.out, progress, resume)?;
     let report = serde_json::json!({
         "task": task.to_string(),
         "iterations": summary.iterations,
@@ -63,7 +62,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         "threads": rayon::current_num_threads(),
         "last": summary.last,
     });
-    crate::util::write_atomic(&args.out.join("summary.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+    quadcl::util::write_atomic(&args.out.join("summary.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
     eprintln!(
         "trained {} iterations ({} env steps) in {:.0} s: physics {:.0} s, policy forward {:.0} s, updates {:.0} s; policy in {}",
         summary.iterations,

@@ -1,4 +1,4 @@
-//! Settings of PPO and the context estimator (CENet), issue 4.
+//! Settings of PPO and the context estimator (CENet).
 //!
 //! Defaults follow legged_gym's `LeggedRobotCfgPPO` (rsl_rl) and DreamWaQ
 //! (Nahrendra et al. 2023) for the CENet; every key can be set from the

@@ -4,11 +4,12 @@
 //! a metric themselves. Commands come back through a [`CommandSender`]
 //! (a channel, so a UI thread can pause a session that runs elsewhere).
 
-use super::learner::{Evaluation, Metrics};
-use crate::cl::ours::{SwitchOverrides, Switches};
-use crate::cl::sequence::TransferInit;
-use crate::nn::stats::MaskReport;
+use super::learner::Evaluation;
+use crate::cl::TransferInit;
+use crate::cl::{SwitchOverrides, Switches};
+use crate::nn::MaskReport;
 use crate::nn::TaskId;
+use crate::rl::Metrics;
 use serde::Serialize;
 
 /// Something that happened in a session.
@@ -23,7 +24,8 @@ pub enum Event {
         iterations: usize,
         switches: Switches,
         related: Vec<TaskId>,
-        fine_tune: bool,
+        /// A repeat of a finished task (METHOD.md 2.5).
+        repeat: bool,
     },
     /// One training iteration finished.
     Iteration { step: usize, task: TaskId, iteration: usize, iterations: usize, metrics: Metrics },

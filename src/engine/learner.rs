@@ -8,14 +8,11 @@
 //! task; `save`/`load` capture everything needed to go on identically.
 
 use crate::config::net::MaskConfig;
-use crate::nn::stats::MaskReport;
+use crate::nn::MaskReport;
 use crate::nn::TaskId;
+use crate::rl::{EvalReport, Metrics};
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::path::Path;
-
-/// One iteration's metrics, by namespaced name (`charts/episodic_return`, ...).
-pub type Metrics = BTreeMap<String, f64>;
 
 /// Everything a learner needs to start one training step of a sequence.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,32 +33,21 @@ pub struct TaskStart {
     pub seed: u64,
 }
 
-/// One evaluation of one task (deterministic for a given seed).
+/// One evaluation of one task (deterministic for a given seed): the
+/// `quadcl eval` figures plus the normalised performance the continual
+/// measures are computed from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Evaluation {
-    /// The task's canonical name.
-    pub task: String,
+    /// Return, tracking errors, falls, survival, the task's name and the seed.
+    #[serde(flatten)]
+    pub report: EvalReport,
     /// Normalised performance R (METHOD.md 4): mean return over the best return a task allows.
     pub performance: f64,
-    /// Episodes evaluated.
-    pub episodes: usize,
-    /// Mean episode return.
-    pub mean_return: f64,
-    /// Mean |v_xy - v_cmd|, m/s (command tracking).
-    pub lin_vel_err: f64,
-    /// Mean |w_z - w_cmd|, rad/s (command tracking).
-    pub ang_vel_err: f64,
-    /// Fraction of episodes that ended in a fall.
-    pub fall_rate: f64,
-    /// Mean seconds survived.
-    pub survival_s: f64,
-    /// The evaluation seed.
-    pub seed: u64,
 }
 
 /// A learner the engine drives task by task.
 pub trait Learner: Send {
-    /// Starts a training step: a new task, or fine-tuning of a finished one (METHOD.md 2.5).
+    /// Starts a training step: a new task, or a repeat of a finished one (METHOD.md 2.5).
     fn begin_task(&mut self, start: &TaskStart) -> anyhow::Result<()>;
     /// One training iteration of the task in progress; returns its metrics. The
     /// metric `charts/performance` (normalised, as [`Evaluation::performance`]) feeds

@@ -13,25 +13,27 @@
 //! `privileged_normalizer.t{t}.{...}` for every learned task t, plus
 //! `engine.last_task` (the task whose state the next task starts from).
 
-use super::learner::{Evaluation, Learner, Metrics, TaskStart};
+use super::learner::{Evaluation, Learner, TaskStart};
 use super::run_config::RunConfig;
-use super::session::derive_seed;
 use crate::config::net::MaskConfig;
 use crate::config::{Config, EnvConfig};
 use crate::nn::checkpoint;
-use crate::nn::stats::{mask_report, MaskReport};
+use crate::nn::{mask_report, MaskReport};
 use crate::nn::{MaskedMlp, TaskId};
-use crate::rl::policy_dir::PolicyInfo;
-use crate::rl::sim_env::SimTrainEnv;
+use crate::rl::metric_names;
+use crate::rl::Metrics;
+use crate::rl::PolicyInfo;
+use crate::rl::SimTrainEnv;
+use crate::rl::TrainingClock;
 use crate::rl::{Agent, PpoLearner, RunningNormalizer, TrainEnv};
 use crate::sim::Perturbation;
+use crate::util::{derive_seed, Stream};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::str::FromStr;
 
-const ENV_SEED: u64 = 10;
 const LAST_TASK_KEY: &str = "engine.last_task";
 
 /// What task t needs for exact recall besides the networks.
@@ -67,10 +69,12 @@ pub struct PpoTaskLearner {
     states: BTreeMap<TaskId, TaskState>,
     last_task: Option<TaskId>,
     iterations_done: usize,
+    /// Env steps and wall time of the training step in progress (`charts/env_steps`, `time/wall_s`).
+    clock: TrainingClock,
 }
 
 /// The PPO learner of a run file, and the tasks of its base policy (if any).
-pub fn make(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<String>)> {
+pub fn make_ppo_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<String>)> {
     let mut learner = PpoTaskLearner::new(&cfg.config, cfg.eval.episodes)?;
     let learned = match &cfg.run.base_policy {
         Some(dir) => learner.load(dir).with_context(|| format!("loading the base policy {}", dir.display()))?,
@@ -98,6 +102,7 @@ impl PpoTaskLearner {
             states: BTreeMap::new(),
             last_task: None,
             iterations_done: 0,
+            clock: TrainingClock::new(0, 0.0),
         })
     }
 
@@ -182,12 +187,13 @@ impl Learner for PpoTaskLearner {
             self.agent = Some(agent);
             return Err(e);
         }
-        let env = self.make_env(&task, self.config.ppo.num_envs, derive_seed(start.seed, ENV_SEED, 0))?;
+        let env = self.make_env(&task, self.config.ppo.num_envs, derive_seed(start.seed, Stream::StepEnvs))?;
         let mut ppo = self.config.ppo.clone();
         ppo.iterations = start.iterations;
         let learner = PpoLearner::new(ppo, agent, self.config.ppo.num_envs, start.seed)?;
         self.training = Some((learner, env, start.task));
         self.iterations_done = 0;
+        self.clock = TrainingClock::new(0, 0.0);
         Ok(())
     }
 
@@ -199,8 +205,9 @@ impl Learner for PpoTaskLearner {
         let (learner, env, _) = self.training.as_mut().context("train_iteration without begin_task")?;
         let mut m = learner.train_iteration(env.as_mut())?;
         if let Some(r) = m.get("charts/mean_step_reward").copied() {
-            m.insert("charts/performance".into(), r / max_step_reward);
+            m.insert(metric_names::PERFORMANCE.into(), r / max_step_reward);
         }
+        self.clock.stamp(&mut m, self.config.ppo.steps_per_env * env.num_envs());
         self.iterations_done += 1;
         Ok(m)
     }
@@ -231,18 +238,8 @@ impl Learner for PpoTaskLearner {
         Self::install(agent, &saved.0)?;
         agent.task = saved.1;
         agent.recall = saved.2;
-        let r = report?;
-        Ok(Evaluation {
-            task: r.task,
-            performance: r.mean_return / max_episode_return(&env_cfg),
-            episodes: r.episodes,
-            mean_return: r.mean_return,
-            lin_vel_err: r.lin_vel_err,
-            ang_vel_err: r.ang_vel_err,
-            fall_rate: r.fall_rate,
-            survival_s: r.survival_s,
-            seed,
-        })
+        let report = report?;
+        Ok(Evaluation { performance: report.mean_return / max_episode_return(&env_cfg), report })
     }
 
     fn mask_report(&self, tasks: &[String]) -> MaskReport {

@@ -2,10 +2,12 @@
 //! evaluation matrix, every evaluation, and the training curves. This is the
 //! body of `metrics.json`, and what `--resume` reads back.
 
-use super::learner::{Evaluation, Metrics};
-use crate::cl::metrics::{forward_transfer, EvalMatrix};
-use crate::cl::ours::Switches;
+use super::learner::Evaluation;
+use crate::cl::Switches;
+use crate::cl::{forward_transfer, EvalMatrix};
 use crate::nn::TaskId;
+use crate::rl::metric_names;
+use crate::rl::Metrics;
 use serde::{Deserialize, Serialize};
 
 /// One training step as it ran.
@@ -19,8 +21,10 @@ pub struct StepRecord {
     pub switches: Switches,
     /// The related tasks whose masks seeded the soft scores (after `random` drawing).
     pub related: Vec<TaskId>,
-    /// A repeat of a finished task: only its private parameters trained.
-    pub fine_tune: bool,
+    /// A repeat of a finished task (METHOD.md 2.5): only its private parameters and biases trained.
+    /// (`fine_tune` in runs written before the rename.)
+    #[serde(alias = "fine_tune")]
+    pub repeat: bool,
 }
 
 /// A training step's curves, one value per iteration.
@@ -51,11 +55,11 @@ impl TaskCurve {
                 v.push(*x);
             }
         };
-        put(&mut self.performance, "charts/performance");
-        put(&mut self.episodic_return, "charts/episodic_return");
-        put(&mut self.lin_vel_err, "charts/lin_vel_err");
-        put(&mut self.ang_vel_err, "charts/ang_vel_err");
-        put(&mut self.fall_rate, "charts/fall_rate");
+        put(&mut self.performance, metric_names::PERFORMANCE);
+        put(&mut self.episodic_return, metric_names::EPISODIC_RETURN);
+        put(&mut self.lin_vel_err, metric_names::LIN_VEL_ERR);
+        put(&mut self.ang_vel_err, metric_names::ANG_VEL_ERR);
+        put(&mut self.fall_rate, metric_names::FALL_RATE);
     }
 }
 
@@ -79,21 +83,32 @@ pub struct SessionResults {
 /// The summary figures of `metrics.json` (METHOD.md 4).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
+    /// Mean over the trained tasks of their performance at the end.
     pub average_performance: Option<f64>,
+    /// Mean of [`Summary::forgetting_per_task`] over the tasks that have one.
     pub forgetting: Option<f64>,
+    /// Per distinct task: performance right after it was last trained minus at the end.
     pub forgetting_per_task: Vec<Option<f64>>,
+    /// Mean over training steps of the performance on the task just trained.
     pub plasticity: Option<f64>,
     /// Per distinct task: forward transfer against the reference curve of the
     /// same task trained alone from scratch (null without a reference).
     pub forward_transfer: Vec<Option<f64>>,
     /// Mean forward transfer over the tasks that have one.
     pub forward_transfer_mean: Option<f64>,
-    /// Per distinct task, at the end of the sequence: mean |v_xy - v_cmd| (m/s).
-    pub final_lin_vel_err: Vec<Option<f64>>,
-    /// Per distinct task, at the end of the sequence: mean |w_z - w_cmd| (rad/s).
-    pub final_ang_vel_err: Vec<Option<f64>>,
-    /// Per distinct task, at the end of the sequence: fall rate.
-    pub final_fall_rate: Vec<Option<f64>>,
+    /// Command tracking and falls per distinct task at the end of the sequence.
+    pub command_tracking: CommandTracking,
+}
+
+/// Command tracking at the end of the run, per distinct task (METHOD.md 4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CommandTracking {
+    /// Mean |v_xy - v_cmd| (m/s) per task, after the last completed step.
+    pub lin_vel_err: Vec<Option<f64>>,
+    /// Mean |w_z - w_cmd| (rad/s) per task.
+    pub ang_vel_err: Vec<Option<f64>>,
+    /// Fall rate per task.
+    pub fall_rate: Vec<Option<f64>>,
 }
 
 impl SessionResults {
@@ -111,7 +126,7 @@ impl SessionResults {
         let known: Vec<f64> = forward.iter().flatten().copied().collect();
         let last = self.evaluations.last();
         let final_of = |f: &dyn Fn(&Evaluation) -> f64| -> Vec<Option<f64>> {
-            self.tasks.iter().map(|name| last.and_then(|l| l.iter().find(|e| &e.task == name)).map(f)).collect()
+            self.tasks.iter().map(|name| last.and_then(|l| l.iter().find(|e| &e.report.task == name)).map(f)).collect()
         };
         Summary {
             average_performance: m.average_performance(),
@@ -120,9 +135,11 @@ impl SessionResults {
             plasticity: m.plasticity(),
             forward_transfer_mean: (!known.is_empty()).then(|| known.iter().sum::<f64>() / known.len() as f64),
             forward_transfer: forward,
-            final_lin_vel_err: final_of(&|e| e.lin_vel_err),
-            final_ang_vel_err: final_of(&|e| e.ang_vel_err),
-            final_fall_rate: final_of(&|e| e.fall_rate),
+            command_tracking: CommandTracking {
+                lin_vel_err: final_of(&|e| e.report.lin_vel_err),
+                ang_vel_err: final_of(&|e| e.report.ang_vel_err),
+                fall_rate: final_of(&|e| e.report.fall_rate),
+            },
         }
     }
 }

@@ -20,8 +20,8 @@
 //! Every key is optional except the tasks; an unknown key is an error naming
 //! the file and the key.
 
-use crate::cl::ours::{SwitchOverrides, Switches};
-use crate::cl::sequence::{KnownBefore, Sequence};
+use crate::cl::{KnownBefore, Sequence};
+use crate::cl::{SwitchOverrides, Switches};
 use crate::config::Config;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LearnerKind {
-    /// PPO + CENet on the simulated quadruped (issue 4).
+    /// PPO + CENet on the simulated quadruped.
     #[default]
     Ppo,
     /// The tiny masked regression learner (tests, trying the engine).
@@ -132,7 +132,7 @@ impl RunConfig {
             }
             Some(other) => anyhow::bail!("method = {other}: expected a [method] table"),
         };
-        crate::cl::method::method_by_name(&method)?;
+        crate::cl::method_by_name(&method)?;
         let switches = Switches::from_mask_config(&config.net.mask).with(&overrides);
         switches.apply(&config.net.mask).context("in [method]")?;
         let eval: EvalConfig = match eval_value {
@@ -165,7 +165,7 @@ mod tests {
         assert_eq!(r.config.seed, 4);
         assert_eq!(r.method, "ours");
         assert!(!r.switches.reinit);
-        assert_eq!(r.switches.lambda, crate::cl::ours::LambdaMode::Free);
+        assert_eq!(r.switches.lambda, crate::cl::LambdaMode::Free);
         assert_eq!(r.run.learner, LearnerKind::Toy);
         assert_eq!(r.sequence.tasks.len(), 2);
         assert_eq!(r.sequence.iterations_of(1), 3);

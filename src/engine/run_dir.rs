@@ -10,8 +10,8 @@
 //! `--resume` continues from the last step `metrics.json` records.
 
 use super::learner::Evaluation;
-use super::results::{SessionResults, StepRecord, TaskCurve};
-use crate::cl::metrics::EvalMatrix;
+use super::results::{SessionResults, StepRecord, Summary, TaskCurve};
+use crate::cl::EvalMatrix;
 use crate::util::write_atomic;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
@@ -22,18 +22,8 @@ pub const RUN_FILE: &str = "run.toml";
 pub const LOG_FILE: &str = "log.txt";
 pub const CHECKPOINTS: &str = "checkpoints";
 
-/// Command tracking at the end of the run, per distinct task (METHOD.md 4).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CommandTracking {
-    /// Mean |v_xy - v_cmd| (m/s) per task, after the last completed step.
-    pub lin_vel_err: Vec<Option<f64>>,
-    /// Mean |w_z - w_cmd| (rad/s) per task.
-    pub ang_vel_err: Vec<Option<f64>>,
-    /// Fall rate per task.
-    pub fall_rate: Vec<Option<f64>>,
-}
-
-/// The content of `metrics.json`.
+/// The content of `metrics.json`: the session's results and their [`Summary`]
+/// (its fields stand at the top level of the file, after `eval_matrix`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MetricsFile {
     pub method: String,
@@ -43,14 +33,10 @@ pub struct MetricsFile {
     pub total_steps: usize,
     /// R[i][j] (`rows`), with the task trained at each step (`trained`).
     pub eval_matrix: EvalMatrix,
-    pub average_performance: Option<f64>,
-    pub forgetting: Option<f64>,
-    pub forgetting_per_task: Vec<Option<f64>>,
-    pub plasticity: Option<f64>,
-    /// Per task, against the `[run] reference` curves; null without one.
-    pub forward_transfer: Vec<Option<f64>>,
-    pub forward_transfer_mean: Option<f64>,
-    pub command_tracking: CommandTracking,
+    /// Average performance, forgetting, plasticity, forward transfer (against
+    /// the `[run] reference` curves; null without one), command tracking.
+    #[serde(flatten)]
+    pub summary: Summary,
     /// The steps as they ran (switches, related tasks, repeats).
     pub steps: Vec<StepRecord>,
     /// Every evaluation after every step.
@@ -62,24 +48,13 @@ pub struct MetricsFile {
 impl MetricsFile {
     /// The file for `results` of a sequence of `total_steps`; `reference` gives from-scratch curves by task name.
     pub fn new(results: &SessionResults, total_steps: usize, reference: &dyn Fn(&str) -> Option<Vec<f64>>) -> Self {
-        let s = results.summary(reference);
         Self {
             method: results.method.clone(),
             tasks: results.tasks.clone(),
             completed_steps: results.steps.len(),
             total_steps,
             eval_matrix: results.eval_matrix.clone(),
-            average_performance: s.average_performance,
-            forgetting: s.forgetting,
-            forgetting_per_task: s.forgetting_per_task,
-            plasticity: s.plasticity,
-            forward_transfer: s.forward_transfer,
-            forward_transfer_mean: s.forward_transfer_mean,
-            command_tracking: CommandTracking {
-                lin_vel_err: s.final_lin_vel_err,
-                ang_vel_err: s.final_ang_vel_err,
-                fall_rate: s.final_fall_rate,
-            },
+            summary: results.summary(reference),
             steps: results.steps.clone(),
             evaluations: results.evaluations.clone(),
             curves: results.curves.clone(),

@@ -18,28 +18,19 @@
 use super::events::{Command, CommandSender, Event, Observer};
 use super::learner::{Learner, TaskStart};
 use super::results::{SessionResults, StepRecord, TaskCurve};
-use crate::cl::method::ContinualMethod;
-use crate::cl::metrics::EvalMatrix;
-use crate::cl::ours::{SwitchOverrides, Switches};
-use crate::cl::sequence::{KnownBefore, Sequence, TransferInit};
+use crate::cl::ContinualMethod;
+use crate::cl::EvalMatrix;
+use crate::cl::{KnownBefore, Sequence, TransferInit};
+use crate::cl::{SwitchOverrides, Switches};
 use crate::config::net::MaskConfig;
 use crate::nn::TaskId;
+use crate::util::{derive_seed, Stream};
 use anyhow::Context;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
 use std::sync::mpsc::{channel, Receiver};
-
-/// A 64-bit mix of a master seed and a purpose/index (splitmix64 finaliser).
-pub fn derive_seed(master: u64, purpose: u64, index: u64) -> u64 {
-    let mut z = master ^ purpose.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ index.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-const TRAIN_SEED: u64 = 1;
-const EVAL_SEED: u64 = 2;
 
 /// What one call of [`Session::step_iteration`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -123,7 +114,7 @@ impl Session {
 
     /// Declares tasks the learner already knows before the sequence starts
     /// (a base policy's): they come first among the task ids and columns, count
-    /// as finished (a sequence entry naming one fine-tunes it, METHOD.md 2.5)
+    /// as finished (a sequence entry naming one repeats it, METHOD.md 2.5)
     /// and are evaluated after every step. Only before any training.
     pub fn with_learned_tasks(mut self, learned: &[String]) -> anyhow::Result<Self> {
         anyhow::ensure!(
@@ -273,7 +264,7 @@ impl Session {
 
     /// Replaces the next task's related tasks and initialisation (METHOD.md 2.6).
     /// The related tasks must be learned already (checked now). Ignored if the next
-    /// task is a repeat (fine-tuning has no initialisation).
+    /// task is a repeat (a repeat has no initialisation).
     pub fn set_next_transfer(&mut self, related: Vec<String>, init: TransferInit) -> anyhow::Result<()> {
         for name in &related {
             let id = self.results.tasks.iter().position(|t| t == name);
@@ -372,10 +363,10 @@ impl Session {
         let task = self.results.tasks.iter().position(|t| *t == spec.name).expect("distinct tasks cover the sequence");
         let switches = self.switches.with(&spec.switches.merged(&self.queued));
         let mask = self.method.task_mask_config(&self.base_mask, &switches)?;
-        let fine_tune = self.finished[task];
-        let seed = derive_seed(self.seed, TRAIN_SEED, step as u64);
+        let repeat = self.finished[task];
+        let seed = derive_seed(self.seed, Stream::SequenceStep(step));
         let (related_names, init) = self.queued_transfer.take().unwrap_or((spec.related.clone(), spec.init));
-        let related = if fine_tune { Vec::new() } else { self.resolve_related(&related_names, init, task, seed)? };
+        let related = if repeat { Vec::new() } else { self.resolve_related(&related_names, init, task, seed)? };
         let start = TaskStart {
             step,
             task,
@@ -395,7 +386,7 @@ impl Session {
             iterations: start.iterations,
             switches: switches.clone(),
             related: related.clone(),
-            fine_tune,
+            repeat,
         };
         let curve = TaskCurve { step, task, name: spec.name.clone(), ..Default::default() };
         self.in_progress = Some(InProgress { record, iteration: 0, curve });
@@ -406,7 +397,7 @@ impl Session {
             iterations: start.iterations,
             switches,
             related,
-            fine_tune,
+            repeat,
         });
         Ok(())
     }
@@ -435,7 +426,7 @@ impl Session {
                     (0..self.finished.len()).filter(|&t| self.finished[t] && t != task).collect();
                 let others: Vec<TaskId> = learned.iter().copied().filter(|t| !named.contains(t)).collect();
                 let pool = if others.len() >= named.len() { others } else { learned };
-                let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, 3, 0));
+                let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, Stream::RandomRelated));
                 let mut drawn: Vec<TaskId> = pool.choose_multiple(&mut rng, named.len()).copied().collect();
                 drawn.sort_unstable();
                 Ok(drawn)
@@ -479,6 +470,6 @@ impl Session {
                 anyhow::anyhow!("no task {task}: the sequence has {} tasks", self.results.tasks.len())
             })?;
         anyhow::ensure!(self.finished[task], "task {task} ({name}) has not been learned yet");
-        self.learner.evaluate(task, &name, derive_seed(self.seed, EVAL_SEED, task as u64))
+        self.learner.evaluate(task, &name, derive_seed(self.seed, Stream::SequenceEval(task)))
     }
 }

@@ -15,7 +15,8 @@
 //! steps earlier (zeros at the start of an episode).
 
 use crate::config::EnvConfig;
-use crate::rl::{EnvDims, EnvStep, TrainEnv};
+use crate::rl::VecStep;
+use crate::rl::{EnvDims, TrainEnv};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -136,7 +137,7 @@ impl TrainEnv for DelayedActions {
     fn obs_histories(&self) -> &[f32] {
         self.inner.obs_histories()
     }
-    fn step(&mut self, actions: &[f32]) -> anyhow::Result<EnvStep> {
+    fn step(&mut self, actions: &[f32]) -> anyhow::Result<VecStep> {
         if self.queue.is_empty() {
             return self.inner.step(actions);
         }
@@ -146,7 +147,7 @@ impl TrainEnv for DelayedActions {
         let act = self.inner.dims().act;
         for e in &step.finished {
             for queued in &mut self.queue {
-                queued[e.env_index * act..(e.env_index + 1) * act].fill(0.0);
+                queued[e.env * act..(e.env + 1) * act].fill(0.0);
             }
         }
         Ok(step)
@@ -180,22 +181,15 @@ mod tests {
         fn obs_histories(&self) -> &[f32] {
             &self.obs
         }
-        fn step(&mut self, actions: &[f32]) -> anyhow::Result<EnvStep> {
+        fn step(&mut self, actions: &[f32]) -> anyhow::Result<VecStep> {
             self.applied.lock().unwrap().push(actions.to_vec());
             self.steps += 1;
             let finished = if self.steps == 2 {
-                vec![crate::rl::FinishedEpisode {
-                    env_index: 1,
-                    episode_return: 0.0,
-                    length_s: 0.04,
-                    lin_vel_err: 0.0,
-                    ang_vel_err: 0.0,
-                    fell: true,
-                }]
+                vec![crate::sim::EpisodeSummary { env: 1, length_s: 0.04, fell: true, ..Default::default() }]
             } else {
                 Vec::new()
             };
-            Ok(EnvStep {
+            Ok(VecStep {
                 reward: vec![0.0; 2],
                 terminated: vec![false; 2],
                 truncated: vec![false; 2],

@@ -6,11 +6,13 @@
 //!
 //! Shapes: x (batch, 8) -> y (batch, 2); hidden [32] ELU.
 
-use super::learner::{Evaluation, Learner, Metrics, TaskStart};
+use super::learner::{Evaluation, Learner, TaskStart};
 use crate::config::net::{Activation, MaskConfig};
 use crate::nn::checkpoint;
-use crate::nn::stats::{mask_report, MaskReport};
+use crate::nn::{mask_report, MaskReport};
 use crate::nn::{AdamConfig, MaskedAdam, MaskedMlp, TaskId};
+use crate::rl::metric_names;
+use crate::rl::{EvalReport, Metrics};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use rand::{Rng, SeedableRng};
@@ -98,8 +100,8 @@ impl Learner for ToyLearner {
         let mse = f64::from(mse.to_scalar::<f32>()?);
         let mut m = Metrics::new();
         m.insert("losses/mse".into(), mse);
-        m.insert("charts/performance".into(), 1.0 / (1.0 + mse));
-        m.insert("charts/episodic_return".into(), -mse);
+        m.insert(metric_names::PERFORMANCE.into(), 1.0 / (1.0 + mse));
+        m.insert(metric_names::EPISODIC_RETURN.into(), -mse);
         Ok(m)
     }
 
@@ -120,17 +122,18 @@ impl Learner for ToyLearner {
         let err: Vec<f64> = pred.iter().zip(&y).map(|(p, t)| f64::from(p - t)).collect();
         let mse = err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64;
         let abs_of = |o: usize| err.iter().skip(o).step_by(OUT).map(|e| e.abs()).sum::<f64>() / EVAL_POINTS as f64;
-        Ok(Evaluation {
+        let report = EvalReport {
             task: name.to_string(),
-            performance: 1.0 / (1.0 + mse),
             episodes: EVAL_POINTS,
             mean_return: -mse,
             lin_vel_err: abs_of(0),
             ang_vel_err: abs_of(1),
             fall_rate: 0.0,
             survival_s: 0.0,
+            return_std: None,
             seed,
-        })
+        };
+        Ok(Evaluation { report, performance: 1.0 / (1.0 + mse) })
     }
 
     fn mask_report(&self, tasks: &[String]) -> MaskReport {

@@ -78,7 +78,9 @@ struct NetworkEntry {
 #[derive(Debug, Serialize, Deserialize)]
 struct TrainingEntry {
     task: TaskId,
-    fine_tune: bool,
+    /// A repeat of a finished task (the manifest's key keeps its first name).
+    #[serde(rename = "fine_tune")]
+    repeat: bool,
     iteration: usize,
 }
 
@@ -153,7 +155,7 @@ pub fn save_policy(
         }
         let training = net.layers()[0].training.as_ref().map(|t| TrainingEntry {
             task: t.task,
-            fine_tune: t.fine_tune,
+            repeat: t.repeat,
             iteration: t.iteration,
         });
         if let Some(t) = &training {
@@ -325,14 +327,14 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 ctx(),
                 tr.task
             );
-            // A finished task can only be fine-tuned; a new one has no mask to fine-tune.
+            // A finished task can only be repeated; a new one has no mask to repeat.
             let finished = e.finish_order.contains(&tr.task);
             ensure!(
-                tr.fine_tune == finished,
+                tr.repeat == finished,
                 "{}: task {} in progress has fine_tune = {}, but it has {}finished",
                 ctx(),
                 tr.task,
-                tr.fine_tune,
+                tr.repeat,
                 if finished { "" } else { "not " }
             );
         }
@@ -394,7 +396,7 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
             let training = match &e.training {
                 Some(tr) => Some(Training {
                     task: tr.task,
-                    fine_tune: tr.fine_tune,
+                    repeat: tr.repeat,
                     iteration: tr.iteration,
                     bias: var(model.f32s(&format!("{n}.bias.current"), &[out_dim])?, &[out_dim])?,
                     mask: None,

@@ -309,8 +309,8 @@ impl CustomOp2 for FusedMlp {
 
 #[cfg(test)]
 mod tests {
+    use super::super::activation::activate;
     use super::*;
-    use crate::nn::activation::activate;
     use candle_core::{Device, Var};
 
     #[test]

@@ -36,7 +36,7 @@ use std::collections::BTreeMap;
 pub(crate) struct Training {
     pub task: TaskId,
     /// A finished task trained again: only PRIVATE(task) weights and its bias move (2.5, 2.7).
-    pub fine_tune: bool,
+    pub repeat: bool,
     pub iteration: usize,
     pub bias: Var,
     /// (out, in) 0/1 hard mask of this iteration; None until `begin_iteration`.
@@ -231,7 +231,7 @@ impl MaskedLinear {
         Ok(bias)
     }
 
-    /// Starts training `task`: fine-tune mode if it already finished, otherwise a fresh bias
+    /// Starts training `task`: repeat mode if it already finished, otherwise a fresh bias
     /// (the mean of the related tasks' biases, zero without any),
     /// sigma back to its initial value, and mu += delta on the elements of related tasks' masks (2.6).
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
@@ -241,13 +241,13 @@ impl MaskedLinear {
             self.name,
             self.training.as_ref().map_or(0, |t| t.task)
         );
-        let fine_tune = self.masks.contains_key(&task);
+        let repeat = self.masks.contains_key(&task);
         let bias = match self.biases.get(&task) {
             Some(b) => b.clone(),
             None => self.related_bias(related)?,
         };
         let bias = var_from(bias, &[self.out_dim])?;
-        if !fine_tune {
+        if !repeat {
             set_var(&self.log_sigma, vec![(self.cfg.sigma_init as f32).ln()])?;
             let mut mu = var_values(&self.score_mean)?;
             let delta = (self.cfg.transfer_bonus * self.cfg.score_init_std) as f32;
@@ -262,7 +262,7 @@ impl MaskedLinear {
         }
         self.training = Some(Training {
             task,
-            fine_tune,
+            repeat,
             iteration: 0,
             bias,
             mask: None,
@@ -283,7 +283,7 @@ impl MaskedLinear {
         let params = self.params();
         let t = self.training.as_mut().with_context(|| format!("{}: begin_iteration without begin_task", self.name))?;
         t.iteration = iteration;
-        if t.fine_tune {
+        if t.repeat {
             let m = &self.masks[&t.task];
             t.mask = Some(mask_tensor((0..n).map(|i| m.get(i)), out_dim, in_dim)?);
             let own = ElementState::Private(t.task);
@@ -371,7 +371,7 @@ impl MaskedLinear {
     /// Finite for every finite log_sigma; its gradient on log_sigma is the constant -beta_H * n.
     pub fn soft_score_loss(&self) -> anyhow::Result<Tensor> {
         match &self.training {
-            Some(t) if !t.fine_tune && self.cfg.entropy && t.iteration < self.cfg.entropy_iterations => {
+            Some(t) if !t.repeat && self.cfg.entropy && t.iteration < self.cfg.entropy_iterations => {
                 let n = (self.out_dim * self.in_dim) as f64;
                 let h = ((self.log_sigma.as_tensor() * n)?
                     + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
@@ -382,7 +382,7 @@ impl MaskedLinear {
     }
 
     /// Trainable variables with their update masks: weight, score, log_sigma (named "{layer}.log_sigma"),
-    /// bias (fine-tune: weight and bias only).
+    /// bias (a repeat: weight and bias only).
     pub fn parameters(&self) -> Vec<Param> {
         let Some(t) = &self.training else { return Vec::new() };
         let p = |suffix: &str, var: &Var, m: Option<&Tensor>| Param {
@@ -391,7 +391,7 @@ impl MaskedLinear {
             update_mask: m.cloned(),
         };
         let mut out = vec![p("weight", &self.weight, t.weight_update.as_ref())];
-        if !t.fine_tune {
+        if !t.repeat {
             out.push(p("score", &self.score_mean, t.score_update.as_ref()));
             if t.iteration < self.cfg.entropy_iterations {
                 out.push(p("log_sigma", &self.log_sigma, None));
@@ -405,7 +405,7 @@ impl MaskedLinear {
     pub fn end_task(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
         let t = self.training.take().with_context(|| format!("{}: end_task without a task in progress", self.name))?;
         self.biases.insert(t.task, var_values(&t.bias)?);
-        if t.fine_tune {
+        if t.repeat {
             return Ok(());
         }
         let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);

@@ -114,7 +114,7 @@ impl MaskedMlp {
     }
 
     /// New task: fresh per-task bias, soft scores (+ forward-transfer bonus on related tasks' masks);
-    /// an already finished task => fine-tune mode (only its private elements and bias train).
+    /// an already finished task => repeat mode (only its private elements and bias train, METHOD.md 2.5).
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
         // Checked here first so that no layer starts when another would refuse.
         if let Some(current) = self.current_task() {

@@ -1,33 +1,37 @@
 //! Masked networks in candle (METHOD.md section 2): knows nothing of the simulator.
 //!
-//! - [`state`]: the life cycle of one weight element (vacant / occupied / private);
-//! - [`bitmask`]: bit-packed per-task masks;
-//! - [`select`]: the selection rules as pure functions;
-//! - [`masked`]: [`MaskedLinear`], where the algorithm lives;
-//! - [`mlp`]: [`MaskedMlp`] (actor, critic, CENet);
-//! - [`fused`]: the whole MLP as one candle custom op (the speed path: gemm on slices, one backward pass);
-//! - [`activation`]: a fused ELU as candle custom ops (layer-by-layer reference path);
-//! - [`optim`]: [`MaskedAdam`], which never moves a frozen element;
+//! - `state`: the life cycle of one weight element (vacant / occupied / private);
+//! - `bitmask`: bit-packed per-task masks;
+//! - `select`: the selection rules as pure functions;
+//! - `masked`: [`MaskedLinear`], where the algorithm lives;
+//! - `mlp`: [`MaskedMlp`] (actor, critic, CENet);
+//! - `fused`: the whole MLP as one candle custom op (the speed path: gemm on slices, one backward pass);
+//! - `activation`: a fused ELU as candle custom ops (layer-by-layer reference path);
+//! - `optim`: [`MaskedAdam`], which never moves a frozen element;
 //! - [`checkpoint`]: policy directories (safetensors + bit-packed masks + manifest);
-//! - [`stats`]: the mask statistics printed by `quadcl masks`.
+//! - `stats`: the mask statistics printed by `quadcl masks`.
 
-pub mod activation;
-pub mod bitmask;
+mod activation;
+mod bitmask;
 pub mod checkpoint;
-pub mod fused;
-pub mod masked;
-pub mod mlp;
-pub mod optim;
-pub mod select;
-pub mod state;
-pub mod stats;
+mod fused;
+mod masked;
+mod mlp;
+mod optim;
+mod select;
+mod state;
+mod stats;
 
 pub use crate::config::net::{Activation, MaskConfig, SelectionRule};
 pub use bitmask::BitMask;
+pub use checkpoint::{load_policy, save_policy, Policy};
+pub use fused::fused_mlp;
 pub use masked::MaskedLinear;
 pub use mlp::MaskedMlp;
 pub use optim::{AdamConfig, MaskedAdam};
-pub use state::{ElementState, TaskId};
+pub use select::row_quota;
+pub use state::{ElementState, IllegalTransition, TaskId};
+pub use stats::{mask_report, LayerMasks, MaskReport, NetworkMasks, TaskMask};
 
 /// A trainable variable with the elements the optimiser may move this step.
 #[derive(Debug, Clone)]

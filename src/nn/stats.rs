@@ -103,6 +103,12 @@ pub fn mask_report(tasks: &[String], networks: &[&MaskedMlp]) -> MaskReport {
 }
 
 impl MaskReport {
+    /// The statistics of every network of the policy directory `dir` (what `quadcl masks` prints).
+    pub fn of_policy(dir: &std::path::Path) -> anyhow::Result<Self> {
+        let policy = super::checkpoint::load_policy(dir)?;
+        Ok(mask_report(&policy.tasks, &policy.networks.iter().collect::<Vec<_>>()))
+    }
+
     /// A readable table: one block per layer, one line per task.
     pub fn to_table(&self) -> String {
         use std::fmt::Write;

@@ -3,7 +3,7 @@
 //! short (fallen) episodes are not over-counted. What `quadcl eval` prints.
 
 use super::agent::Agent;
-use super::env::{FinishedEpisode, TrainEnv};
+use super::env::{EpisodeSummary, TrainEnv};
 use serde::{Deserialize, Serialize};
 
 /// The figures of one evaluation (the `quadcl eval --json` object).
@@ -23,8 +23,10 @@ pub struct EvalReport {
     pub fall_rate: f64,
     /// Mean simulated seconds survived.
     pub survival_s: f64,
-    /// Standard deviation of the episode returns.
-    pub return_std: f64,
+    /// Standard deviation of the episode returns (absent from the evaluations
+    /// of sequence runs written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub return_std: Option<f64>,
     /// The evaluation seed.
     pub seed: u64,
 }
@@ -40,14 +42,14 @@ pub fn evaluate(
     max_steps: usize,
 ) -> anyhow::Result<EvalReport> {
     let n = env.num_envs();
-    let mut first: Vec<Option<FinishedEpisode>> = vec![None; n];
+    let mut first: Vec<Option<EpisodeSummary>> = vec![None; n];
     let mut done = 0;
     for _ in 0..max_steps {
         let actions = agent.act_deterministic(env.observations(), env.obs_histories())?;
         let step = env.step(&actions)?;
         for episode in step.finished {
-            anyhow::ensure!(episode.env_index < n, "episode from env {} of {n}", episode.env_index);
-            let slot = &mut first[episode.env_index];
+            anyhow::ensure!(episode.env < n, "episode from env {} of {n}", episode.env);
+            let slot = &mut first[episode.env];
             if slot.is_none() {
                 *slot = Some(episode);
                 done += 1;
@@ -58,25 +60,25 @@ pub fn evaluate(
         }
     }
     anyhow::ensure!(done == n, "evaluation: only {done} of {n} episodes ended within {max_steps} steps");
-    let episodes: Vec<FinishedEpisode> = first.into_iter().flatten().collect();
+    let episodes: Vec<EpisodeSummary> = first.into_iter().flatten().collect();
     Ok(summarize(task, seed, &episodes))
 }
 
 /// The report over finished episodes.
-pub fn summarize(task: &str, seed: u64, episodes: &[FinishedEpisode]) -> EvalReport {
+pub fn summarize(task: &str, seed: u64, episodes: &[EpisodeSummary]) -> EvalReport {
     let count = episodes.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&FinishedEpisode) -> f64| episodes.iter().map(f).sum::<f64>() / count;
-    let mean_return = mean(&|e| e.episode_return);
-    let variance = mean(&|e| (e.episode_return - mean_return).powi(2));
+    let mean = |f: &dyn Fn(&EpisodeSummary) -> f64| episodes.iter().map(f).sum::<f64>() / count;
+    let mean_return = mean(&|e| f64::from(e.episode_return));
+    let variance = mean(&|e| (f64::from(e.episode_return) - mean_return).powi(2));
     EvalReport {
         task: task.to_string(),
         episodes: episodes.len(),
         mean_return,
-        lin_vel_err: mean(&|e| e.lin_vel_err),
-        ang_vel_err: mean(&|e| e.ang_vel_err),
+        lin_vel_err: mean(&|e| f64::from(e.lin_vel_err)),
+        ang_vel_err: mean(&|e| f64::from(e.ang_vel_err)),
         fall_rate: mean(&|e| f64::from(u8::from(e.fell))),
-        survival_s: mean(&|e| e.length_s),
-        return_std: variance.sqrt(),
+        survival_s: mean(&|e| f64::from(e.length_s)),
+        return_std: Some(variance.sqrt()),
         seed,
     }
 }
@@ -85,8 +87,15 @@ pub fn summarize(task: &str, seed: u64, episodes: &[FinishedEpisode]) -> EvalRep
 mod tests {
     use super::*;
 
-    fn episode(ret: f64, fell: bool, len: f64) -> FinishedEpisode {
-        FinishedEpisode { env_index: 0, episode_return: ret, length_s: len, lin_vel_err: 0.2, ang_vel_err: 0.4, fell }
+    fn episode(ret: f32, fell: bool, len: f32) -> EpisodeSummary {
+        EpisodeSummary {
+            episode_return: ret,
+            length_s: len,
+            lin_vel_err: 0.25,
+            ang_vel_err: 0.4,
+            fell,
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -94,9 +103,9 @@ mod tests {
         let r = summarize("none", 3, &[episode(1.0, false, 20.0), episode(3.0, true, 5.0)]);
         assert_eq!(r.episodes, 2);
         assert_eq!(r.mean_return, 2.0);
-        assert_eq!(r.return_std, 1.0);
+        assert_eq!(r.return_std, Some(1.0));
         assert_eq!(r.fall_rate, 0.5);
         assert_eq!(r.survival_s, 12.5);
-        assert!((r.lin_vel_err - 0.2).abs() < 1e-12);
+        assert!((r.lin_vel_err - 0.25).abs() < 1e-12, "the episodes report f32 figures: 0.25 is exact");
     }
 }

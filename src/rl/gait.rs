@@ -110,7 +110,7 @@ pub fn contact_strip(contacts: &[[bool; 4]], steps: usize) -> Vec<String> {
 
 /// Runs `agent`'s deterministic policy on one environment of `task` with `command` held for
 /// `warmup_s + seconds` (no pushes, nominal physics) and analyses the last `seconds`.
-pub fn record(
+pub fn record_gait(
     agent: &Agent,
     env_cfg: &EnvConfig,
     robot: &RobotModel,
@@ -160,7 +160,7 @@ pub fn record(
 }
 
 /// The world-frame velocity projected on the trunk's heading (its x axis in the ground plane).
-fn trunk_forward_speed(s: &crate::sim::physics::RawState) -> f32 {
+fn trunk_forward_speed(s: &crate::sim::RawState) -> f32 {
     let [x, y, z, w] = s.base_quat;
     // First column of the rotation matrix: the trunk's x axis in the world frame.
     let (hx, hy) = (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z));

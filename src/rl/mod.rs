@@ -1,42 +1,54 @@
 //! The learner: PPO with a privileged critic and a context estimator
-//! (DreamWaQ's CENet), issue 4.
+//! (DreamWaQ's CENet).
 //!
 //! | file | what |
 //! | --- | --- |
-//! | [`ppo`] | the PPO learner: rollout collection and the update, top to bottom |
-//! | [`agent`] | actor, critic, CENet encoder/decoder, policy std, observation statistics |
-//! | [`rollout`] | the rollout buffer of one iteration, GAE with time-out bootstrapping |
-//! | [`normalizer`] | running observation statistics, frozen when a task ends |
-//! | [`losses`] | the PPO loss pieces (Gaussian log-prob/entropy, clipped surrogate, value loss, KL, adaptive lr) |
-//! | [`cenet_loss`] | the CENet's output split, reparameterisation and beta-VAE loss |
-//! | [`trainer`] | one task's training run: progress bar, `metrics.jsonl`, policy directory |
-//! | [`evaluate`] | deterministic evaluation, one episode per env: the `quadcl eval` figures |
-//! | [`policy_dir`] | save/load a trained policy directory (weights, normaliser statistics, manifest) |
-//! | [`env`] | the `TrainEnv` trait: what the learner needs from a batch of environments |
-//! | [`toy_env`] | a point-mass `TrainEnv` for fast tests of the loop |
-//! | [`sim_env`] | the simulated quadruped (`sim::VecEnv`) as a `TrainEnv` |
+//! | `ppo` | the PPO learner: rollout collection and the update, top to bottom |
+//! | `agent` | actor, critic, CENet encoder/decoder, policy std, observation statistics |
+//! | `rollout` | the rollout buffer of one iteration, GAE with time-out bootstrapping |
+//! | `normalizer` | running observation statistics, frozen when a task ends |
+//! | `losses` | the PPO loss pieces (Gaussian log-prob/entropy, clipped surrogate, value loss, KL, adaptive lr) |
+//! | `cenet_loss` | the CENet's output split, reparameterisation and beta-VAE loss |
+//! | `trainer` | one task's training run: `metrics.jsonl`, checkpoints, policy directory |
+//! | `metrics` | the [`Metrics`] of an iteration and the metric names every loop shares |
+//! | `progress` | what every training loop shares in reporting: the bar, the iteration line, the step and time counters |
+//! | `evaluate` | deterministic evaluation, one episode per env: the `quadcl eval` figures |
+//! | `gait` | the contact pattern of a policy under one held command |
+//! | `policy_dir` | save/load a trained policy directory (weights, normaliser statistics, manifest) |
+//! | `env` | the [`TrainEnv`] trait: what the learner needs from a batch of environments |
+//! | `toy_env` | a point-mass [`TrainEnv`] for fast tests of the loop |
+//! | `sim_env` | the simulated quadruped (`sim::VecEnv`) as a [`TrainEnv`] |
 
-pub mod agent;
-pub mod cenet_loss;
-pub mod env;
-pub mod evaluate;
-pub mod gait;
-pub mod losses;
-pub mod normalizer;
-pub mod policy_dir;
-pub mod ppo;
-pub mod rollout;
-pub mod sim_env;
+mod agent;
+mod cenet_loss;
+mod env;
+mod evaluate;
+mod gait;
+mod losses;
+mod metrics;
+mod normalizer;
+mod policy_dir;
+mod ppo;
+mod progress;
+mod rollout;
+mod sim_env;
 #[cfg(test)]
 mod test_tensors;
-pub mod toy_env;
-pub mod trainer;
+mod toy_env;
+mod trainer;
 
-pub use agent::Agent;
-pub use env::{EnvDims, EnvStep, FinishedEpisode, TrainEnv};
+pub use agent::{ActOutput, Agent};
+pub use env::{EnvDims, EpisodeSummary, TrainEnv, VecStep};
 pub use evaluate::{evaluate, EvalReport};
+pub use gait::{record_gait, GaitReport, GaitSummary};
+pub use metrics::{names as metric_names, Metrics};
 pub use normalizer::RunningNormalizer;
-pub use policy_dir::{load_policy, save_policy, LoadedPolicy, PolicyInfo};
-pub use ppo::{Metrics, PpoLearner};
-pub use rollout::{gae, RolloutBuffer, RolloutDims, StepRecord};
-pub use trainer::{train, TrainSummary};
+pub use policy_dir::{
+    load_for_task, load_policy, load_policy_or_checkpoint, load_training_checkpoint, save_policy, LoadedPolicy,
+    PolicyInfo, PolicyOrCheckpoint,
+};
+pub use ppo::PpoLearner;
+pub use progress::{iteration_summary, progress_bar, TrainingClock};
+pub use sim_env::SimTrainEnv;
+pub use toy_env::ToyEnv;
+pub use trainer::{load_resume_point, train, train_from, TrainSummary, TrainerState};

@@ -148,7 +148,7 @@ pub fn learned_task_names(policy: &LoadedPolicy) -> Vec<&str> {
 /// `trainer`) and returns the agent ready to go on training that task: the
 /// networks keep their soft scores and training state, the observation
 /// statistics follow the data again. A policy whose tasks all ended is an
-/// error: a finished task can only be fine-tuned (METHOD 2.5), not resumed.
+/// error: a finished task can only be repeated (METHOD 2.5), not resumed.
 pub fn load_training_checkpoint(dir: &Path) -> anyhow::Result<LoadedPolicy> {
     into_training(load_policy(dir, None)?, dir)
 }

@@ -14,22 +14,20 @@
 
 use super::agent::{matrix, normal_tensor, Agent};
 use super::cenet_loss::{cenet_loss, reparameterize};
-use super::env::{FinishedEpisode, TrainEnv};
+use super::env::{EpisodeSummary, TrainEnv};
 use super::losses::{
     adapt_learning_rate, clip_fraction, clipped_surrogate_loss, gaussian_entropy, gaussian_kl, gaussian_log_prob,
     normalize_advantages, value_loss,
 };
-use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, StepRecord};
+use super::metrics::{names, Metrics};
+use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, RolloutRow};
 use crate::config::PpoConfig;
 use crate::nn::{AdamConfig, MaskedAdam};
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 use std::time::Instant;
-
-/// One iteration's metrics, by namespaced name (`losses/approx_kl`, ...).
-pub type Metrics = BTreeMap<String, f64>;
 
 /// Episodes kept for the episode statistics (`charts/episodic_return`, ...).
 const EPISODE_WINDOW: usize = 100;
@@ -43,7 +41,7 @@ pub struct PpoLearner {
     rng: ChaCha8Rng,
     /// (act,) the policy's log-std when the rollout was collected.
     rollout_log_std: Option<Tensor>,
-    recent_episodes: VecDeque<FinishedEpisode>,
+    recent_episodes: VecDeque<EpisodeSummary>,
     /// Iterations completed.
     pub iteration: usize,
 }
@@ -95,7 +93,7 @@ impl PpoLearner {
         let total = start.elapsed().as_secs_f64();
         metrics.insert("time/rollout_s".into(), rollout_s);
         metrics.insert("time/update_s".into(), update_s);
-        metrics.insert("charts/SPS".into(), self.buffer.capacity() as f64 / total.max(1e-9));
+        metrics.insert(names::SPS.into(), self.buffer.capacity() as f64 / total.max(1e-9));
         self.iteration += 1;
         metrics.insert("charts/iteration".into(), self.iteration as f64);
         Ok(metrics)
@@ -135,7 +133,7 @@ impl PpoLearner {
             } else {
                 step.reward.clone()
             };
-            self.buffer.push(&StepRecord {
+            self.buffer.push(&RolloutRow {
                 obs: &obs,
                 privileged_obs: &privileged,
                 obs_history: &history,
@@ -165,12 +163,13 @@ impl PpoLearner {
         m.insert("time/policy_s".into(), policy_s);
         if !self.recent_episodes.is_empty() {
             let n = self.recent_episodes.len() as f64;
-            let mean = |f: fn(&FinishedEpisode) -> f64| self.recent_episodes.iter().map(f).sum::<f64>() / n;
-            m.insert("charts/episodic_return".into(), mean(|e| e.episode_return));
+            let mean =
+                |f: fn(&EpisodeSummary) -> f32| self.recent_episodes.iter().map(|e| f64::from(f(e))).sum::<f64>() / n;
+            m.insert(names::EPISODIC_RETURN.into(), mean(|e| e.episode_return));
             m.insert("charts/episodic_length_s".into(), mean(|e| e.length_s));
-            m.insert("charts/lin_vel_err".into(), mean(|e| e.lin_vel_err));
-            m.insert("charts/ang_vel_err".into(), mean(|e| e.ang_vel_err));
-            m.insert("charts/fall_rate".into(), mean(|e| f64::from(u8::from(e.fell))));
+            m.insert(names::LIN_VEL_ERR.into(), mean(|e| e.lin_vel_err));
+            m.insert(names::ANG_VEL_ERR.into(), mean(|e| e.ang_vel_err));
+            m.insert(names::FALL_RATE.into(), mean(|e| f32::from(u8::from(e.fell))));
         }
         let rewards = &self.buffer.rewards;
         m.insert(

@@ -71,7 +71,7 @@ pub struct RolloutBuffer {
 /// What the learner observed and decided at one step of all environments.
 /// Every slice is row-major with `num_envs` rows.
 #[derive(Debug, Clone, Copy)]
-pub struct StepRecord<'a> {
+pub struct RolloutRow<'a> {
     pub obs: &'a [f32],
     pub privileged_obs: &'a [f32],
     pub obs_history: &'a [f32],
@@ -145,7 +145,7 @@ impl RolloutBuffer {
 
     /// Appends one step of all environments. Errors if the buffer is full or a
     /// slice has the wrong length (naming the field).
-    pub fn push(&mut self, step: &StepRecord<'_>) -> anyhow::Result<()> {
+    pub fn push(&mut self, step: &RolloutRow<'_>) -> anyhow::Result<()> {
         anyhow::ensure!(self.len < self.num_steps, "rollout buffer is full ({} steps)", self.num_steps);
         let n = self.num_envs;
         let d = self.dims;
@@ -359,7 +359,7 @@ mod tests {
         let mut buf = RolloutBuffer::new(dims, 1, 1);
         let z = [0.0f32; 8];
         let b = [false];
-        let mut step = StepRecord {
+        let mut step = RolloutRow {
             obs: &z[..2],
             privileged_obs: &z[..3],
             obs_history: &z[..4],

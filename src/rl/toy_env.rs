@@ -11,7 +11,7 @@
 //! and critic observations on purpose: it is a proxy of the (unobserved) time in the
 //! episode, and a critic that learns it biases GAE towards standing still.
 
-use super::env::{EnvDims, EnvStep, FinishedEpisode, TrainEnv};
+use super::env::{EnvDims, EpisodeSummary, TrainEnv, VecStep};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -114,10 +114,10 @@ impl TrainEnv for ToyEnv {
         &self.history
     }
 
-    fn step(&mut self, actions: &[f32]) -> anyhow::Result<EnvStep> {
+    fn step(&mut self, actions: &[f32]) -> anyhow::Result<VecStep> {
         let n = self.num_envs();
         anyhow::ensure!(actions.len() == n, "toy env: expected {n} actions, got {}", actions.len());
-        let mut out = EnvStep {
+        let mut out = VecStep {
             reward: vec![0.0; n],
             terminated: vec![false; n],
             truncated: vec![false; n],
@@ -139,13 +139,14 @@ impl TrainEnv for ToyEnv {
             out.terminated[e] = self.x[e].abs() > 2.0;
             out.truncated[e] = self.steps[e] >= self.episode_steps;
             if out.terminated[e] || out.truncated[e] {
-                out.finished.push(FinishedEpisode {
-                    env_index: e,
-                    episode_return: self.episode_return[e],
-                    length_s: self.steps[e] as f64 * f64::from(DT),
-                    lin_vel_err: self.episode_err[e] / self.steps[e] as f64,
+                out.finished.push(EpisodeSummary {
+                    env: e,
+                    episode_return: self.episode_return[e] as f32,
+                    length_s: self.steps[e] as f32 * DT,
+                    lin_vel_err: (self.episode_err[e] / self.steps[e] as f64) as f32,
                     ang_vel_err: 0.0,
                     fell: out.terminated[e],
+                    term_sums: Default::default(),
                 });
                 self.reset(e);
             }

@@ -23,15 +23,15 @@
 
 use super::agent::Agent;
 use super::env::TrainEnv;
+use super::metrics::Metrics;
 use super::policy_dir::{load_training_checkpoint, save_policy, PolicyInfo};
-use super::ppo::{Metrics, PpoLearner};
+use super::ppo::PpoLearner;
+use super::progress::{iteration_summary, progress_bar, TrainingClock};
 use crate::config::Config;
-use crate::util::write_atomic;
+use crate::util::{derive_seed, replace_dir, write_atomic, Stream};
 use anyhow::Context;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use std::time::Instant;
 
 /// Rewrite `metrics.jsonl` at least every this many iterations.
 const METRICS_FLUSH_EVERY: usize = 10;
@@ -51,12 +51,6 @@ pub struct TrainSummary {
     pub last: Metrics,
 }
 
-/// The learner's random stream is derived from the master seed, apart from
-/// the network initialisers and the environment's.
-pub fn learner_seed(master: u64) -> u64 {
-    master ^ 0x5eed_1ea7_0000_0001
-}
-
 /// What `checkpoint/trainer.json` holds besides the policy.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct TrainerState {
@@ -68,12 +62,6 @@ pub struct TrainerState {
     pub env_steps: usize,
     /// Wall-clock seconds of training so far.
     pub wall_s: f64,
-}
-
-/// The seeds of a run resumed after `iteration` iterations: a fresh stream,
-/// a function of (master seed, iteration) only.
-pub fn resume_seed(master: u64, iteration: usize) -> u64 {
-    learner_seed(master) ^ (iteration as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)
 }
 
 /// Trains a fresh agent on `env` for `config.ppo.iterations` iterations and
@@ -129,8 +117,8 @@ pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Res
     Ok((agent, state))
 }
 
-/// Writes `checkpoint/` as a whole: into `checkpoint.new/`, then renamed over
-/// the old one, so a crash leaves the previous checkpoint intact.
+/// Writes `checkpoint/` as a whole (see [`replace_dir`]), so a crash leaves
+/// the previous checkpoint intact.
 fn save_checkpoint(
     learner: &PpoLearner,
     task: &str,
@@ -138,29 +126,15 @@ fn save_checkpoint(
     state: &TrainerState,
     out: &Path,
 ) -> anyhow::Result<()> {
-    let fresh = out.join("checkpoint.new");
-    let old = out.join("checkpoint.old");
-    let dir = out.join("checkpoint");
-    for stale in [&fresh, &old] {
-        if stale.exists() {
-            std::fs::remove_dir_all(stale).with_context(|| format!("removing {}", stale.display()))?;
-        }
-    }
-    save_policy(&learner.agent, &[task.to_string()], info, &fresh)?;
-    write_atomic(&fresh.join("trainer.json"), serde_json::to_string_pretty(state)?.as_bytes())?;
-    if dir.exists() {
-        std::fs::rename(&dir, &old).with_context(|| format!("moving {} aside", dir.display()))?;
-    }
-    std::fs::rename(&fresh, &dir).with_context(|| format!("renaming {} to {}", fresh.display(), dir.display()))?;
-    if old.exists() {
-        std::fs::remove_dir_all(&old).with_context(|| format!("removing {}", old.display()))?;
-    }
-    Ok(())
+    replace_dir(&out.join("checkpoint"), |dir| {
+        save_policy(&learner.agent, &[task.to_string()], info, dir)?;
+        write_atomic(&dir.join("trainer.json"), serde_json::to_string_pretty(state)?.as_bytes())
+    })
 }
 
 /// [`train`], or with `resume` (from [`load_resume_point`]) the same run
 /// continued from its checkpoint; `env` must then be seeded with
-/// [`resume_seed`].
+/// `derive_seed(config.seed, Stream::Trainer(iteration))`.
 pub fn train_from(
     config: &Config,
     task: &str,
@@ -176,11 +150,19 @@ pub fn train_from(
         None => {
             let mut agent = Agent::new(env.dims(), config, config.seed)?;
             agent.begin_task(0, &[])?;
-            (PpoLearner::new(cfg.clone(), agent, env.num_envs(), learner_seed(config.seed))?, None, String::new())
+            (
+                PpoLearner::new(cfg.clone(), agent, env.num_envs(), derive_seed(config.seed, Stream::Trainer(0)))?,
+                None,
+                String::new(),
+            )
         }
         Some((agent, state)) => {
-            let mut learner =
-                PpoLearner::new(cfg.clone(), agent, env.num_envs(), resume_seed(config.seed, state.iteration))?;
+            let mut learner = PpoLearner::new(
+                cfg.clone(),
+                agent,
+                env.num_envs(),
+                derive_seed(config.seed, Stream::Trainer(state.iteration)),
+            )?;
             learner.iteration = state.iteration;
             learner.optimizer.set_learning_rate(state.learning_rate);
             let path = out.join("metrics.jsonl");
@@ -191,22 +173,18 @@ pub fn train_from(
     };
     let first = done.as_ref().map_or(0, |s| s.iteration);
 
-    let bar = if progress { ProgressBar::new(cfg.iterations as u64) } else { ProgressBar::hidden() };
+    let bar = progress_bar(cfg.iterations, progress);
+    bar.set_prefix(task.to_string());
     bar.set_position(first as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} it  eta {eta}  {msg}")
-            .expect("a valid progress template")
-            .progress_chars("=> "),
-    );
-    let start = Instant::now();
-    let wall_before = done.as_ref().map_or(0.0, |s| s.wall_s);
+    let mut clock =
+        TrainingClock::new(done.as_ref().map_or(0, |s| s.env_steps), done.as_ref().map_or(0.0, |s| s.wall_s));
     // A resumed run's time splits start from the kept rows, so the summary covers the whole run.
     let kept_time = |key: &str| -> f64 {
         log.lines().filter_map(|l| serde_json::from_str::<Metrics>(l).ok()).filter_map(|m| m.get(key).copied()).sum()
     };
     let mut summary = TrainSummary {
         iterations: 0,
-        env_steps: done.as_ref().map_or(0, |s| s.env_steps),
+        env_steps: 0,
         wall_s: 0.0,
         env_s: kept_time("time/env_s"),
         policy_s: kept_time("time/policy_s"),
@@ -217,9 +195,7 @@ pub fn train_from(
     let info_at = |iterations: usize| PolicyInfo { config: config.clone(), dims, iterations };
     for it in first..cfg.iterations {
         let mut m = learner.train_iteration(env)?;
-        summary.env_steps += cfg.steps_per_env * env.num_envs();
-        m.insert("charts/env_steps".into(), summary.env_steps as f64);
-        m.insert("time/wall_s".into(), wall_before + start.elapsed().as_secs_f64());
+        clock.stamp(&mut m, cfg.steps_per_env * env.num_envs());
         summary.env_s += m.get("time/env_s").copied().unwrap_or(0.0);
         summary.policy_s += m.get("time/policy_s").copied().unwrap_or(0.0);
         summary.update_s += m.get("time/update_s").copied().unwrap_or(0.0);
@@ -236,20 +212,13 @@ pub fn train_from(
             let state = TrainerState {
                 iteration: it + 1,
                 learning_rate: learner.optimizer.learning_rate(),
-                env_steps: summary.env_steps,
-                wall_s: wall_before + start.elapsed().as_secs_f64(),
+                env_steps: clock.env_steps(),
+                wall_s: clock.wall_s(),
             };
             save_checkpoint(&learner, task, &info_at(it + 1), &state, out)?;
         }
         if cfg.log_every > 0 && (it % cfg.log_every == 0 || last) {
-            let get = |k: &str| m.get(k).copied().unwrap_or(f64::NAN);
-            bar.set_message(format!(
-                "return {:.2}  lin_err {:.2}  fall {:.2}  SPS {:.0}",
-                get("charts/episodic_return"),
-                get("charts/lin_vel_err"),
-                get("charts/fall_rate"),
-                get("charts/SPS")
-            ));
+            bar.set_message(iteration_summary(&m));
         }
         bar.inc(1);
         summary.last = m;
@@ -260,6 +229,7 @@ pub fn train_from(
     learner.end_task()?;
     save_policy(&learner.agent, &[task.to_string()], &info_at(cfg.iterations), &out.join("policy"))?;
     summary.iterations = cfg.iterations;
-    summary.wall_s = wall_before + start.elapsed().as_secs_f64();
+    summary.env_steps = clock.env_steps();
+    summary.wall_s = clock.wall_s();
     Ok(summary)
 }

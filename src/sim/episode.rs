@@ -19,8 +19,9 @@ pub struct Step {
     pub finished: Option<EpisodeSummary>,
 }
 
-/// Summary of one finished episode.
-#[derive(Debug, Clone, PartialEq)]
+/// Summary of one finished episode: what the simulator reports, and what
+/// every learner (`rl::TrainEnv`, the toy environments too) and evaluation reads.
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct EpisodeSummary {
     /// Index of the env in its batch (0 for a lone env).
     pub env: usize,

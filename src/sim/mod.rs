@@ -1,28 +1,29 @@
 //! The simulated quadruped, in rapier3d only: knows nothing of networks or UI.
 //!
-//! - [`robot`]: URDF parsing and validation, legs found by structure.
-//! - [`physics`]: one robot in one rapier world, implicit PD, state read-back.
-//! - [`terrain`]: the ground.
-//! - [`tasks`]: leg perturbations (crash / invert / noise) and their syntax.
+//! - `robot`: URDF parsing and validation, legs found by structure.
+//! - `physics`: one robot in one rapier world, implicit PD, state read-back.
+//! - `terrain`: the ground.
+//! - `tasks`: leg perturbations (crash / invert / noise) and their syntax.
 //! - [`obs`]: observation and privileged-observation layouts.
 //! - [`reward`]: the paper's Table 1, one function per term.
-//! - [`env`](mod@env): `LocomotionEnv`, reset(seed) / step(action).
-//! - [`episode`]: the step result and the finished-episode summary.
-//! - [`vec_env`]: a batch of envs stepped in parallel with rayon.
+//! - `env`: `LocomotionEnv`, reset(seed) / step(action).
+//! - `episode`: the step result and the finished-episode summary.
+//! - `vec_env`: a batch of envs stepped in parallel with rayon.
 
-pub mod env;
-pub mod episode;
+mod env;
+mod episode;
 pub mod obs;
-pub mod physics;
+mod physics;
 pub mod reward;
-pub mod robot;
-pub mod tasks;
-pub mod terrain;
-pub mod vec_env;
+mod robot;
+mod tasks;
+mod terrain;
+mod vec_env;
 
 pub use env::LocomotionEnv;
 pub use episode::{EpisodeSummary, Step};
 pub use obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_BASE_LIN_VEL, PRIV_OBS_DIM};
-pub use robot::{Leg, RobotModel};
+pub use physics::RawState;
+pub use robot::{Leg, LegJoint, RobotModel, JOINTS_PER_LEG, NUM_LEGS};
 pub use tasks::{Perturbation, PerturbationKind};
 pub use vec_env::{VecEnv, VecStep};

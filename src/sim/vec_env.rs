@@ -13,11 +13,13 @@ use super::obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
 use crate::config::EnvConfig;
+use crate::util::{derive_seed, Stream};
 use anyhow::bail;
 use rayon::prelude::*;
 use std::sync::Arc;
 
-/// What a batch step returns.
+/// What a step of a batch of environments returns: the simulator's
+/// [`VecEnv::step`], and every `rl::TrainEnv`'s.
 #[derive(Debug, Clone, Default)]
 pub struct VecStep {
     /// (num_envs,)
@@ -40,16 +42,8 @@ pub struct VecEnv {
     histories: Vec<f32>,
 }
 
-/// The seed of env `index` in a batch seeded with `seed` (splitmix64 of both).
-pub fn env_seed(seed: u64, index: usize) -> u64 {
-    let mut z = seed ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(0x6A09_E667_F3BC_C909);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 impl VecEnv {
-    /// `num_envs` envs with the same task, env i reset with `env_seed(seed, i)`.
+    /// `num_envs` envs with the same task, env i reset with `derive_seed(seed, Stream::Env(i))`.
     pub fn new(
         cfg: &EnvConfig,
         robot: &RobotModel,
@@ -65,7 +59,7 @@ impl VecEnv {
             .into_par_iter()
             .map(|i| {
                 let mut env = LocomotionEnv::with_shared_robot(cfg, robot.clone(), task, i)?;
-                env.reset(env_seed(seed, i))?;
+                env.reset(derive_seed(seed, Stream::Env(i)))?;
                 Ok(env)
             })
             .collect::<anyhow::Result<Vec<_>>>()?;
@@ -111,9 +105,9 @@ impl VecEnv {
         }
     }
 
-    /// Reseeds and resets every env (env i with `env_seed(seed, i)`).
+    /// Reseeds and resets every env (env i with `derive_seed(seed, Stream::Env(i))`).
     pub fn reset(&mut self, seed: u64) -> anyhow::Result<()> {
-        self.envs.par_iter_mut().enumerate().try_for_each(|(i, env)| env.reset(env_seed(seed, i)))?;
+        self.envs.par_iter_mut().enumerate().try_for_each(|(i, env)| env.reset(derive_seed(seed, Stream::Env(i))))?;
         self.gather();
         Ok(())
     }

@@ -1,25 +1,24 @@
-//! Sim-to-real fine-tuning (METHOD.md 2.7, `quadcl finetune`): one learned
+//! Sim-to-real fine-tuning, `sim2real` in code (METHOD.md 2.7; the command is
+//! `quadcl finetune`, distinct from the `finetune` baseline that trains on
+//! with nothing protecting old tasks): one learned
 //! task of a policy directory trains again on a shifted environment; only
 //! its PRIVATE elements, its biases, its action std and its observation
-//! statistics move (the masked networks' fine-tune mode). Every other task's
+//! statistics move (the masked networks' repeat mode, METHOD.md 2.5). Every other task's
 //! outputs are bit-identical before and after: the report shows their
 //! evaluations side by side.
 
 use super::learner::{Evaluation, Learner, TaskStart};
 use super::ppo_learner::PpoTaskLearner;
-use super::session::derive_seed;
 use super::shift::Shift;
-use crate::util::write_atomic;
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::rl::metric_names;
+use crate::rl::{iteration_summary, progress_bar};
+use crate::util::{derive_seed, write_atomic, Stream};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-const FINETUNE_SEED: u64 = 20;
-const EVAL_SEED: u64 = 21;
-
 /// What `finetune.json` (beside the new policy) holds.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FinetuneReport {
+pub struct Sim2RealReport {
     pub task: String,
     pub shift: Shift,
     pub iterations: usize,
@@ -35,7 +34,7 @@ pub struct FinetuneReport {
 
 /// Fine-tunes task `task` of the policy in `policy` on `shift` and writes the
 /// new policy directory `out` (with `finetune.json`). `iterations` overrides the shift file's.
-pub fn finetune(
+pub fn sim2real(
     policy: &Path,
     task: &str,
     shift: &Shift,
@@ -43,7 +42,7 @@ pub fn finetune(
     seed: u64,
     episodes: usize,
     progress: bool,
-) -> anyhow::Result<FinetuneReport> {
+) -> anyhow::Result<Sim2RealReport> {
     shift.validate()?;
     anyhow::ensure!(out != policy, "--out must be a new directory, not the policy itself");
     anyhow::ensure!(
@@ -58,7 +57,10 @@ pub fn finetune(
     learner.set_shift(shift);
     let evaluate_all = |learner: &mut PpoTaskLearner| -> anyhow::Result<Vec<Evaluation>> {
         let learned: Vec<usize> = (0..tasks.len()).filter(|&t| learner.has_task(t)).collect();
-        learned.into_iter().map(|t| learner.evaluate(t, &tasks[t], derive_seed(seed, EVAL_SEED, t as u64))).collect()
+        learned
+            .into_iter()
+            .map(|t| learner.evaluate(t, &tasks[t], derive_seed(seed, Stream::Sim2RealEval(t))))
+            .collect()
     };
     let before = evaluate_all(&mut learner)?;
     let start = TaskStart {
@@ -68,31 +70,31 @@ pub fn finetune(
         related: Vec::new(),
         mask: learner.mask_config(),
         iterations: shift.iterations,
-        seed: derive_seed(seed, FINETUNE_SEED, 0),
+        seed: derive_seed(seed, Stream::Sim2RealTrain),
     };
     learner.begin_task(&start)?;
-    let bar = if progress { ProgressBar::new(shift.iterations as u64) } else { ProgressBar::hidden() };
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} finetune [{bar:30}] {pos}/{len} it  {msg}")
-            .expect("a valid template")
-            .progress_chars("=> "),
-    );
+    let bar = progress_bar(shift.iterations, progress);
+    bar.set_prefix(format!("sim2real {task}"));
     let mut curve = Vec::new();
     for _ in 0..shift.iterations {
         let m = learner.train_iteration()?;
-        if let Some(p) = m.get("charts/performance") {
+        if let Some(p) = m.get(metric_names::PERFORMANCE) {
             curve.push(*p);
-            bar.set_message(format!("performance {p:.3}"));
         }
+        bar.set_message(iteration_summary(&m));
         bar.inc(1);
     }
     bar.finish();
     learner.end_task()?;
     let after = evaluate_all(&mut learner)?;
-    let changed_other_tasks =
-        before.iter().zip(&after).filter(|(b, a)| b.task != task && b != a).map(|(b, _)| b.task.clone()).collect();
+    let changed_other_tasks = before
+        .iter()
+        .zip(&after)
+        .filter(|(b, a)| b.report.task != task && b != a)
+        .map(|(b, _)| b.report.task.clone())
+        .collect();
     learner.save(out, &tasks)?;
-    let report = FinetuneReport {
+    let report = Sim2RealReport {
         task: task.to_string(),
         shift: shift.clone(),
         iterations: shift.iterations,

@@ -3,8 +3,8 @@
 //! bit-identical before and after; the new directory is a policy `quadcl
 //! eval` reads; a bad shift file or an unknown task is a clear error.
 
-use quadcl::engine::finetune::finetune;
-use quadcl::engine::shift::Shift;
+use quadcl::engine::sim2real;
+use quadcl::engine::Shift;
 use quadcl::headless::{run, RunOptions};
 use std::path::Path;
 
@@ -23,17 +23,17 @@ fn finetuning_one_task_leaves_every_other_task_bit_identical() {
         iterations: 2,
     };
     let new = tmp.path().join("tuned");
-    let r = finetune(&policy, "invert:RR", &shift, &new, 5, 4, false).unwrap();
+    let r = sim2real(&policy, "invert:RR", &shift, &new, 5, 4, false).unwrap();
     assert_eq!(r.before.len(), 3);
     assert!(r.changed_other_tasks.is_empty(), "{:?}", r.changed_other_tasks);
-    let tuned_before = r.before.iter().find(|e| e.task == "invert:RR").unwrap();
-    let tuned_after = r.after.iter().find(|e| e.task == "invert:RR").unwrap();
+    let tuned_before = r.before.iter().find(|e| e.report.task == "invert:RR").unwrap();
+    let tuned_after = r.after.iter().find(|e| e.report.task == "invert:RR").unwrap();
     assert_ne!(tuned_before, tuned_after, "the fine-tuned task changed");
     let loaded = quadcl::rl::load_policy(&new, Some("crash:FL")).unwrap();
     assert_eq!(loaded.tasks.len(), 3);
     assert!(new.join("finetune.json").exists());
 
-    let err = format!("{:#}", finetune(&policy, "crash:RR", &shift, &tmp.path().join("x"), 5, 4, false).unwrap_err());
+    let err = format!("{:#}", sim2real(&policy, "crash:RR", &shift, &tmp.path().join("x"), 5, 4, false).unwrap_err());
     assert!(err.contains("crash:RR") && err.contains("invert:RR"), "{err}");
     std::fs::write(tmp.path().join("bad.toml"), "fricton = [0.1, 0.2]\n").unwrap();
     let err = format!("{:#}", Shift::load(&tmp.path().join("bad.toml")).unwrap_err());

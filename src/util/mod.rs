@@ -1,0 +1,27 @@
+//! The base layer every other module may use (it imports none of them):
+//! atomic writes ([`write_atomic`], [`replace_dir`]), content hashes
+//! ([`sha256_hex`]), and the derivation of every random stream ([`derive_seed`]).
+
+mod fs;
+mod seed;
+
+pub use fs::{replace_dir, write_atomic};
+pub use seed::{derive_seed, Stream};
+
+use sha2::{Digest, Sha256};
+
+/// Hex SHA-256 of `bytes`, used for the content hashes in manifests.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    let digest = Sha256::digest(bytes);
+    digest.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sha256_hex_matches_known_digest() {
+        assert_eq!(sha256_hex(b"abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+    }
+}
