@@ -120,7 +120,8 @@ fn edit_manifest(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
 
 #[test]
 fn inconsistent_manifest_is_an_error_not_a_later_panic() {
-    let cases: [(&str, fn(&mut serde_json::Value)); 6] = [
+    type ManifestEdit = fn(&mut serde_json::Value);
+    let cases: [(&str, ManifestEdit); 6] = [
         // The re-initialisation at the task's end would panic drawing from U(1, -1).
         ("init_bound", |m| m["networks"][0]["layers"][1]["init_bound"] = (-1.0).into()),
         // Fine-tuning a task that never finished (it has no mask to fine-tune).

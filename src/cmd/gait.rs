@@ -4,7 +4,7 @@
 //! second, which feet move together and the gait they name (`rl::gait`).
 
 use clap::Args;
-use quadcl::rl::{record_gait, GaitReport};
+use quadcl::rl::{record_gait, GaitReport, HeldCommand};
 use quadcl::sim::Perturbation;
 use quadcl::sim::RobotModel;
 use std::path::PathBuf;
@@ -40,8 +40,13 @@ pub fn run(args: GaitArgs) -> anyhow::Result<()> {
     let loaded = quadcl::rl::load_for_task(&args.policy, &task.to_string())?;
     let env_cfg = &loaded.info.config.env;
     let robot = RobotModel::for_config(env_cfg)?;
-    let report =
-        record_gait(&loaded.agent, env_cfg, &robot, &task, [args.vx, 0.0, args.wz], 2.0, args.seconds, args.seed)?;
+    let report = record_gait(
+        &loaded.agent,
+        env_cfg,
+        &robot,
+        &task,
+        HeldCommand { command: [args.vx, 0.0, args.wz], warmup_s: 2.0, seconds: args.seconds, seed: args.seed },
+    )?;
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {

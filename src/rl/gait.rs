@@ -108,18 +108,30 @@ pub fn contact_strip(contacts: &[[bool; 4]], steps: usize) -> Vec<String> {
         .collect()
 }
 
-/// Runs `agent`'s deterministic policy on one environment of `task` with `command` held for
-/// `warmup_s + seconds` (no pushes, nominal physics) and analyses the last `seconds`.
+/// One held command and how long to watch it (`quadcl gait`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldCommand {
+    /// (vx m/s, vy m/s, wz rad/s), held for the whole run.
+    pub command: [f32; 3],
+    /// Seconds to settle into the gait before recording.
+    pub warmup_s: f32,
+    /// Seconds recorded and analysed.
+    pub seconds: f32,
+    /// Seed of the environment's reset.
+    pub seed: u64,
+}
+
+/// Runs `agent`'s deterministic policy on one environment of `task` with the
+/// command of `run` held for `warmup_s + seconds` (no pushes, nominal physics)
+/// and analyses the last `seconds`.
 pub fn record_gait(
     agent: &Agent,
     env_cfg: &EnvConfig,
     robot: &RobotModel,
     task: &Perturbation,
-    command: [f32; 3],
-    warmup_s: f32,
-    seconds: f32,
-    seed: u64,
+    run: HeldCommand,
 ) -> anyhow::Result<GaitReport> {
+    let HeldCommand { command, warmup_s, seconds, seed } = run;
     let cfg = EnvConfig { randomize: false, push_interval_s: 0.0, ..env_cfg.clone() };
     let mut env = LocomotionEnv::new(&cfg, robot, task)?;
     env.reset(seed)?;

@@ -40,7 +40,7 @@ mod trainer;
 pub use agent::{ActOutput, Agent};
 pub use env::{EnvDims, EpisodeSummary, TrainEnv, VecStep};
 pub use evaluate::{evaluate, EvalReport};
-pub use gait::{record_gait, GaitReport, GaitSummary};
+pub use gait::{record_gait, GaitReport, GaitSummary, HeldCommand};
 pub use metrics::{names as metric_names, Metrics};
 pub use normalizer::RunningNormalizer;
 pub use policy_dir::{
