@@ -171,7 +171,7 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
         match session.train_next_task()? {
             StepOutcome::TaskFinished { step } => {
                 let name = &session.results().steps[step].name;
-                session.learner().save(&dir.checkpoint(step, name), &session.results().tasks)?;
+                dir.write_checkpoint(step, name, session.learner(), &session.results().tasks)?;
                 dir.write_metrics(&MetricsFile::new(session.results(), total_steps, &reference_curve))?;
                 if cfg.run.keep_last_checkpoint_only && step > 0 {
                     // Only after metrics.json names the new checkpoint as the last one.

@@ -49,11 +49,11 @@ fn smoke_run_forgets_nothing_and_recalls_every_task_bit_for_bit() {
     }
     // An earlier one names every task of the sequence but has learned only the first.
     let first = out.join("checkpoints/step-00-crash_FL");
-    assert_eq!(quadcl::rl::load_policy(&first, None).unwrap().agent.task, 0, "its last learned task");
+    assert_eq!(quadcl::rl::load_policy(&first, None).unwrap().agent.task(), 0, "its last learned task");
     let err = format!("{:#}", quadcl::rl::load_policy(&first, Some("noise:FR")).unwrap_err());
     assert!(err.contains("step-00-crash_FL") && err.contains("not learned yet") && err.contains("crash:FL"), "{err}");
     let zero_shot = quadcl::rl::load_for_task(&first, "noise:FR").unwrap();
-    assert_eq!(zero_shot.agent.task, 0, "eval on a task to come runs the last learned one");
+    assert_eq!(zero_shot.agent.task(), 0, "eval on a task to come runs the last learned one");
 
     let parts = tmp.path().join("parts");
     run(&smoke(), &parts, RunOptions { stop_after: Some(2), ..Default::default() }).unwrap();

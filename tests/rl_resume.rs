@@ -57,7 +57,7 @@ fn a_resumed_run_goes_on_from_its_last_checkpoint() {
     let longer = toy_config(8);
     let (agent, state) = load_resume_point(&longer, "none", dir.path()).unwrap();
     assert_eq!(state.iteration, 4);
-    assert!(!agent.recall && agent.actor.current_task() == Some(0), "the task must still be in training");
+    assert!(!agent.in_recall() && agent.actor().current_task() == Some(0), "the task must still be in training");
     let mut env = ToyEnv::new(16, 10, derive_seed(longer.seed, Stream::Trainer(state.iteration)));
     let summary = train_from(&longer, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
     assert_eq!(summary.iterations, 8);
@@ -153,9 +153,9 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
     assert!(private(&first) > 0, "the default p = 0.02 made some elements private");
     assert_eq!(private(&ended), 0);
     let x =
-        Tensor::ones((3, first.agent.actor.sizes()[0]), candle_core::DType::F32, &candle_core::Device::Cpu).unwrap();
+        Tensor::ones((3, first.agent.actor().sizes()[0]), candle_core::DType::F32, &candle_core::Device::Cpu).unwrap();
     let out = |p: &quadcl::rl::LoadedPolicy| {
-        p.agent.actor.forward_task(0, &x).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap()
+        p.agent.actor().forward_task(0, &x).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap()
     };
     assert_eq!(out(&first), out(&ended), "the task's recall is unchanged");
     for (a, b) in first.agent.networks().iter().zip(ended.agent.networks()) {

@@ -33,7 +33,7 @@ fn training_writes_config_metrics_and_a_policy_that_reloads_bit_identically() {
     let loaded = load_policy(&dir.path().join("policy"), None).unwrap();
     assert_eq!(loaded.tasks, vec!["none".to_string()]);
     assert_eq!(loaded.info.iterations, 3);
-    assert!(loaded.agent.recall && loaded.agent.obs_normalizer.is_frozen());
+    assert!(loaded.agent.in_recall() && loaded.agent.obs_normalizer().is_frozen());
     save_policy(&loaded.agent, &loaded.tasks, &loaded.info, &dir.path().join("again")).unwrap();
     for file in ["model.safetensors", "masks.safetensors"] {
         assert_eq!(

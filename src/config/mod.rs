@@ -1,7 +1,7 @@
 //! Every hyperparameter of quadcl, with a doc comment and a default, in one
 //! tree that loads from a TOML file under `scenes/`.
 //!
-//! One file per concern: [`env`] (the simulated robot and its rewards),
+//! One file per concern: [`env`](mod@env) (the simulated robot and its rewards),
 //! [`net`] (masked networks and the method's mask settings), [`ppo`] (the
 //! learner). A TOML file only names what it changes; every table and key is
 //! optional, and an unknown key is an error that names the file and the key.

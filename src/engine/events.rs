@@ -71,7 +71,7 @@ pub type CommandSender = std::sync::mpsc::Sender<Command>;
 /// Collects every event (tests, recorders that write at the end).
 #[derive(Debug, Default, Clone)]
 pub struct EventLog {
-    pub events: std::sync::Arc<std::sync::Mutex<Vec<Event>>>,
+    events: std::sync::Arc<std::sync::Mutex<Vec<Event>>>,
 }
 
 impl EventLog {

@@ -72,7 +72,7 @@ pub struct SessionResults {
     pub tasks: Vec<String>,
     /// The completed training steps.
     pub steps: Vec<StepRecord>,
-    /// R[i][j]: performance on task j after step i.
+    /// `R[i][j]`: performance on task j after step i.
     pub eval_matrix: EvalMatrix,
     /// Every evaluation after each step (the tracking errors, fall rates, ...).
     pub evaluations: Vec<Vec<Evaluation>>,

@@ -10,9 +10,10 @@
 //! `--resume` continues from the last step `metrics.json` records.
 
 use super::learner::Evaluation;
+use super::learner::Learner;
 use super::results::{SessionResults, StepRecord, Summary, TaskCurve};
 use crate::cl::EvalMatrix;
-use crate::util::write_atomic;
+use crate::util::{replace_dir, write_atomic};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -31,7 +32,7 @@ pub struct MetricsFile {
     pub tasks: Vec<String>,
     pub completed_steps: usize,
     pub total_steps: usize,
-    /// R[i][j] (`rows`), with the task trained at each step (`trained`).
+    /// `R[i][j]` (`rows`), with the task trained at each step (`trained`).
     pub eval_matrix: EvalMatrix,
     /// Average performance, forgetting, plasticity, forward transfer (against
     /// the `[run] reference` curves; null without one), command tracking.
@@ -109,6 +110,18 @@ impl RunDir {
     /// Whether the folder already holds a run.
     pub fn has_run(&self) -> bool {
         self.metrics_path().exists() || self.root.join(RUN_FILE).exists()
+    }
+
+    /// Writes the checkpoint of step `step` (training `task`) as a whole
+    /// (see [`replace_dir`]): the learner's state with the sequence's task names.
+    pub fn write_checkpoint(
+        &self,
+        step: usize,
+        task: &str,
+        learner: &dyn Learner,
+        tasks: &[String],
+    ) -> anyhow::Result<()> {
+        replace_dir(&self.checkpoint(step, task), |dir| learner.save(dir, tasks))
     }
 
     /// Writes `metrics.json` atomically.

@@ -12,7 +12,7 @@ use super::ppo_learner::PpoTaskLearner;
 use super::shift::Shift;
 use crate::rl::metric_names;
 use crate::rl::{iteration_summary, progress_bar};
-use crate::util::{derive_seed, write_atomic, Stream};
+use crate::util::{derive_seed, replace_dir, write_atomic, Stream};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -48,6 +48,13 @@ pub fn sim2real(
     anyhow::ensure!(
         !out.join(crate::nn::checkpoint::MANIFEST_FILE).exists(),
         "{} already holds a policy",
+        out.display()
+    );
+    // The new policy replaces `out` as a whole: anything else in it would be lost.
+    let holds_files = out.read_dir().map(|mut entries| entries.next().is_some()).unwrap_or(false);
+    anyhow::ensure!(
+        !holds_files,
+        "--out {} is not empty: name a new directory for the fine-tuned policy",
         out.display()
     );
     let (mut learner, tasks) = PpoTaskLearner::from_policy(policy, episodes)?;
@@ -93,7 +100,6 @@ pub fn sim2real(
         .filter(|(b, a)| b.report.task != task && b != a)
         .map(|(b, _)| b.report.task.clone())
         .collect();
-    learner.save(out, &tasks)?;
     let report = Sim2RealReport {
         task: task.to_string(),
         shift: shift.clone(),
@@ -103,6 +109,10 @@ pub fn sim2real(
         changed_other_tasks,
         curve,
     };
-    write_atomic(&out.join("finetune.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+    // The new policy and its report appear together, or not at all.
+    replace_dir(out, |dir| {
+        learner.save(dir, &tasks)?;
+        write_atomic(&dir.join("finetune.json"), serde_json::to_string_pretty(&report)?.as_bytes())
+    })?;
     Ok(report)
 }

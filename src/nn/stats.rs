@@ -1,13 +1,5 @@
 //! Mask statistics (printed by `quadcl masks`): per network, per layer, per
-//! task, which parameters are used. The JSON shape is stable (scripts read it):
-//!
-//! `{"tasks": [names], "networks": [{"name", "layers": [{"name", "shape": [out, in],
-//! "vacant", "occupied", "private": {task: count}, "per_task": [{"task", "selected",
-//! "fraction", "from_vacant", "from_occupied"}], "overlap": [[count]]}]}]}`
-//!
-//! `from_vacant` counts a task's elements that no task finished before it
-//! used (fresh capacity), `from_occupied` the ones it reused; `overlap[i][j]`
-//! counts elements selected by both the i-th and j-th entries of `per_task`.
+//! task, which parameters are used. The JSON shape is documented on [`MaskReport`].
 
 use super::masked::MaskedLinear;
 use super::mlp::MaskedMlp;
@@ -15,6 +7,16 @@ use super::state::ElementState;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// Per network, layer and task, which parameters are used. The JSON shape is
+/// stable (scripts read it):
+///
+/// `{"tasks": [names], "networks": [{"name", "layers": [{"name", "shape": [out, in],
+/// "vacant", "occupied", "private": {task: count}, "per_task": [{"task", "selected",
+/// "fraction", "from_vacant", "from_occupied"}], "overlap": [[count]]}]}]}`
+///
+/// `from_vacant` counts a task's elements that no task finished before it
+/// used (fresh capacity), `from_occupied` the ones it reused; `overlap[i][j]`
+/// counts elements selected by both the i-th and j-th entries of `per_task`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MaskReport {
     pub tasks: Vec<String>,

@@ -30,24 +30,24 @@ use rand_distr::StandardNormal;
 /// Networks, policy std and observation statistics of one learner.
 #[derive(Debug)]
 pub struct Agent {
-    pub dims: EnvDims,
+    pub(crate) dims: EnvDims,
     /// Latent width L of the CENet (0 when the CENet is off).
-    pub latent_dim: usize,
-    pub use_cenet: bool,
-    pub actor: MaskedMlp,
-    pub critic: MaskedMlp,
-    pub encoder: MaskedMlp,
-    pub decoder: MaskedMlp,
+    pub(crate) latent_dim: usize,
+    pub(crate) use_cenet: bool,
+    pub(crate) actor: MaskedMlp,
+    pub(crate) critic: MaskedMlp,
+    pub(crate) encoder: MaskedMlp,
+    pub(crate) decoder: MaskedMlp,
     /// The task being trained, or recalled.
-    pub task: TaskId,
+    pub(crate) task: TaskId,
     /// Recall mode: forward with the task's frozen masks (after `end_task`, or loaded).
-    pub recall: bool,
+    pub(crate) recall: bool,
     /// (act,) log standard deviation of the policy.
-    pub log_std: Var,
+    pub(crate) log_std: Var,
     /// Statistics of the actor observation (also used for each history block).
-    pub obs_normalizer: RunningNormalizer,
+    pub(crate) obs_normalizer: RunningNormalizer,
     /// Statistics of the privileged observation.
-    pub privileged_normalizer: RunningNormalizer,
+    pub(crate) privileged_normalizer: RunningNormalizer,
     normalize: bool,
     logvar_clamp: f64,
 }
@@ -77,6 +77,31 @@ pub fn matrix(data: &[f32], width: usize) -> candle_core::Result<Tensor> {
 }
 
 impl Agent {
+    /// The widths of the environment the agent was built for.
+    pub fn dims(&self) -> EnvDims {
+        self.dims
+    }
+
+    /// The task being trained, or recalled.
+    pub fn task(&self) -> TaskId {
+        self.task
+    }
+
+    /// Whether the agent recalls a finished task's frozen masks (after `end_task`, or loaded).
+    pub fn in_recall(&self) -> bool {
+        self.recall
+    }
+
+    /// The actor network.
+    pub fn actor(&self) -> &MaskedMlp {
+        &self.actor
+    }
+
+    /// Statistics of the actor observation.
+    pub fn obs_normalizer(&self) -> &RunningNormalizer {
+        &self.obs_normalizer
+    }
+
     /// Fresh networks for an environment with `dims`; `seed` seeds every
     /// initialiser. Sizes: `config.net` (actor, critic, CENet encoder),
     /// `config.ppo.cenet_decoder_hidden` (decoder, with the encoder's activation).

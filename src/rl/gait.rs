@@ -68,7 +68,7 @@ pub fn analyse(contacts: &[[bool; 4]], dt: f32) -> GaitSummary {
     }
 }
 
-/// What [`analyse`] finds in a contact sequence.
+/// What the contact analysis finds in a contact sequence.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GaitSummary {
     /// Fraction of steps each foot (FL, FR, RL, RR) is on the ground.

@@ -34,16 +34,16 @@ const EPISODE_WINDOW: usize = 100;
 
 /// PPO over an [`Agent`], with its optimiser, rollout buffer and random stream.
 pub struct PpoLearner {
-    pub cfg: PpoConfig,
-    pub agent: Agent,
-    pub optimizer: MaskedAdam,
+    pub(crate) cfg: PpoConfig,
+    pub(crate) agent: Agent,
+    pub(crate) optimizer: MaskedAdam,
     buffer: RolloutBuffer,
     rng: ChaCha8Rng,
     /// (act,) the policy's log-std when the rollout was collected.
     rollout_log_std: Option<Tensor>,
     recent_episodes: VecDeque<EpisodeSummary>,
     /// Iterations completed.
-    pub iteration: usize,
+    pub(crate) iteration: usize,
 }
 
 impl PpoLearner {

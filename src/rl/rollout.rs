@@ -44,28 +44,28 @@ pub struct RolloutDims {
 /// One iteration's transitions; see the module doc for the layout.
 #[derive(Debug, Clone)]
 pub struct RolloutBuffer {
-    pub dims: RolloutDims,
-    pub num_steps: usize,
-    pub num_envs: usize,
+    pub(crate) dims: RolloutDims,
+    pub(crate) num_steps: usize,
+    pub(crate) num_envs: usize,
     /// Steps written so far (0..=num_steps).
-    pub len: usize,
-    pub obs: Vec<f32>,
-    pub privileged_obs: Vec<f32>,
-    pub obs_history: Vec<f32>,
-    pub context: Vec<f32>,
-    pub next_obs: Vec<f32>,
-    pub base_velocity: Vec<f32>,
-    pub actions: Vec<f32>,
-    pub action_means: Vec<f32>,
-    pub log_probs: Vec<f32>,
-    pub values: Vec<f32>,
-    pub rewards: Vec<f32>,
-    pub terminated: Vec<bool>,
-    pub truncated: Vec<bool>,
+    pub(crate) len: usize,
+    pub(crate) obs: Vec<f32>,
+    pub(crate) privileged_obs: Vec<f32>,
+    pub(crate) obs_history: Vec<f32>,
+    pub(crate) context: Vec<f32>,
+    pub(crate) next_obs: Vec<f32>,
+    pub(crate) base_velocity: Vec<f32>,
+    pub(crate) actions: Vec<f32>,
+    pub(crate) action_means: Vec<f32>,
+    pub(crate) log_probs: Vec<f32>,
+    pub(crate) values: Vec<f32>,
+    pub(crate) rewards: Vec<f32>,
+    pub(crate) terminated: Vec<bool>,
+    pub(crate) truncated: Vec<bool>,
     /// (T, N), filled by [`RolloutBuffer::compute_returns`].
-    pub advantages: Vec<f32>,
+    pub(crate) advantages: Vec<f32>,
     /// (T, N), advantages + values: the critic's regression target.
-    pub returns: Vec<f32>,
+    pub(crate) returns: Vec<f32>,
 }
 
 /// What the learner observed and decided at one step of all environments.
