@@ -148,3 +148,19 @@ fn keeping_only_the_last_checkpoint_still_resumes_identically() {
     assert_eq!(kept, vec![std::ffi::OsString::from("step-01-invert_RR")]);
     assert_eq!(run(&cfg, &out, opts(true, None)).unwrap(), whole);
 }
+
+#[test]
+fn the_shipped_metrics_json_written_before_the_renames_still_reads_and_round_trips() {
+    // policies/sequence-a1 was written with `fine_tune` step flags and evaluations without return_std.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("policies/sequence-a1/metrics.json");
+    let m = MetricsFile::load(&path).unwrap();
+    assert_eq!((m.completed_steps, m.tasks.len()), (4, 5));
+    assert!(m.steps.iter().all(|s| !s.repeat), "no step of that run repeats a task");
+    assert!(m.evaluations.iter().flatten().all(|e| e.report.return_std.is_none()));
+    assert_eq!(m.summary.forgetting, Some(0.0));
+    let raw: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(m.summary.average_performance, raw["average_performance"].as_f64());
+    assert_eq!(m.summary.command_tracking.fall_rate[1], raw["command_tracking"]["fall_rate"][1].as_f64());
+    let again: MetricsFile = serde_json::from_str(&serde_json::to_string_pretty(&m).unwrap()).unwrap();
+    assert_eq!(again, m, "what it reads it writes back unchanged");
+}

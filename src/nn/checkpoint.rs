@@ -394,18 +394,12 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 biases.insert(t, model.f32s(&format!("{n}.bias.{t}"), &[out_dim])?);
             }
             let training = match &e.training {
-                Some(tr) => Some(Training {
-                    task: tr.task,
-                    repeat: tr.repeat,
-                    iteration: tr.iteration,
-                    bias: var(model.f32s(&format!("{n}.bias.current"), &[out_dim])?, &[out_dim])?,
-                    mask: None,
-                    noise: None,
-                    weight_update: None,
-                    score_update: None,
-                    previous_selection: None,
-                    mask_churn: None,
-                }),
+                Some(tr) => Some(Training::new(
+                    tr.task,
+                    tr.repeat,
+                    tr.iteration,
+                    var(model.f32s(&format!("{n}.bias.current"), &[out_dim])?, &[out_dim])?,
+                )),
                 None => None,
             };
             layers.push(MaskedLinear {

@@ -51,6 +51,24 @@ pub(crate) struct Training {
     pub mask_churn: Option<f64>,
 }
 
+impl Training {
+    /// Training of `task` at `iteration` with its bias variable; no iteration drawn yet.
+    pub(crate) fn new(task: TaskId, repeat: bool, iteration: usize, bias: Var) -> Self {
+        Self {
+            task,
+            repeat,
+            iteration,
+            bias,
+            mask: None,
+            noise: None,
+            weight_update: None,
+            score_update: None,
+            previous_selection: None,
+            mask_churn: None,
+        }
+    }
+}
+
 /// A linear layer with per-task binary masks over shared base weights.
 #[derive(Debug)]
 pub struct MaskedLinear {
@@ -260,18 +278,7 @@ impl MaskedLinear {
             mu.iter_mut().zip(&bonus).filter(|(_, b)| **b).for_each(|(m, _)| *m += delta);
             set_var(&self.score_mean, mu)?;
         }
-        self.training = Some(Training {
-            task,
-            repeat,
-            iteration: 0,
-            bias,
-            mask: None,
-            noise: None,
-            weight_update: None,
-            score_update: None,
-            previous_selection: None,
-            mask_churn: None,
-        });
+        self.training = Some(Training::new(task, repeat, 0, bias));
         Ok(())
     }
 
