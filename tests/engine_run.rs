@@ -3,6 +3,8 @@
 //! uninterrupted run, and a corrupt checkpoint or config is a clear error
 //! that leaves the existing results intact.
 
+mod engine_common;
+use engine_common::assert_metrics_json_complete;
 use quadcl::engine::MetricsFile;
 use quadcl::headless::{run, RunOptions};
 use std::path::{Path, PathBuf};
@@ -31,23 +33,7 @@ fn a_run_writes_every_metrics_field_checkpoints_and_a_log() {
     let out = tmp.path().join("out");
     let m = run(&cfg, &out, opts(false, None)).unwrap();
     assert_eq!((m.completed_steps, m.total_steps), (3, 3));
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
-    for key in [
-        "method",
-        "tasks",
-        "eval_matrix",
-        "average_performance",
-        "forgetting",
-        "forward_transfer",
-        "plasticity",
-        "curves",
-        "command_tracking",
-        "steps",
-        "evaluations",
-    ] {
-        assert!(json.get(key).is_some(), "metrics.json has no {key}");
-    }
+    let json = assert_metrics_json_complete(&out);
     assert_eq!(json["method"], "ours");
     assert_eq!(json["forgetting"], 0.0);
     assert_eq!(json["eval_matrix"]["rows"].as_array().unwrap().len(), 3);

@@ -4,6 +4,8 @@
 //! evaluation right after it was learned (nn's exact recall + deterministic
 //! evaluation); resume gives the same file byte for byte.
 
+mod engine_common;
+use engine_common::assert_metrics_json_complete;
 use quadcl::headless::{run, RunOptions};
 use std::path::Path;
 
@@ -18,21 +20,7 @@ fn smoke_run_forgets_nothing_and_recalls_every_task_bit_for_bit() {
     let m = run(&smoke(), &out, RunOptions::default()).unwrap();
     assert_eq!(m.completed_steps, 3);
     assert_eq!(m.summary.forgetting, Some(0.0));
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
-    for key in [
-        "method",
-        "tasks",
-        "eval_matrix",
-        "average_performance",
-        "forgetting",
-        "forward_transfer",
-        "plasticity",
-        "curves",
-        "command_tracking",
-    ] {
-        assert!(json.get(key).is_some(), "metrics.json has no {key}");
-    }
+    assert_metrics_json_complete(&out);
     for (j, name) in m.tasks.iter().enumerate().take(2) {
         let right_after = m.evaluations[j].iter().find(|e| &e.report.task == name).unwrap();
         let at_end = m.evaluations[2].iter().find(|e| &e.report.task == name).unwrap();
