@@ -5,7 +5,8 @@
 #
 #   scripts/shipped_figures.sh [QUADCL_BINARY] > figures.txt
 #
-# Evaluations: 32 episodes, seed 0, pushes on (the `quadcl eval` defaults).
+# Evaluations: 32 episodes, seed 0, pushes on (the `quadcl eval` defaults);
+# the gait at the `quadcl gait` defaults (0.5 m/s); the sha256 of `masks --json`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${1:-target/release/quadcl}
@@ -24,6 +25,7 @@ for entry in "${evals[@]}"; do
   read -r dir task <<<"$entry"
   echo "eval $dir $task: $("$bin" eval --policy "$dir" --task "$task" --json)"
 done
+echo "gait policies/base-a1-flat: $("$bin" gait --policy policies/base-a1-flat --json)"
 for dir in policies/base-a1-flat policies/base-a1-flat-shared "$seq_ckpt"; do
   echo "masks $dir: sha256 $("$bin" masks --policy "$dir" --json | sha256sum | cut -d' ' -f1)"
 done
