@@ -3,13 +3,10 @@
 //! every task (see `engine::run_dir`), `--resume` from the last completed task.
 //! The progress bar and the log are observers of the session's events.
 
-use crate::engine::Learner;
-use crate::engine::ToyLearner;
-use crate::engine::{Event, Observer, Session, StepOutcome};
-use crate::engine::{LearnerKind, RunConfig};
-use crate::engine::{MetricsFile, RunDir, RUN_FILE};
-use crate::rl::Metrics;
-use crate::rl::{iteration_summary, progress_bar};
+use crate::engine::{
+    Event, Learner, LearnerKind, MetricsFile, Observer, RunConfig, RunDir, Session, StepOutcome, ToyLearner, RUN_FILE,
+};
+use crate::rl::{iteration_summary, progress_bar, Metrics};
 use anyhow::Context;
 use indicatif::ProgressBar;
 use std::path::Path;

@@ -2,11 +2,9 @@
 //! inside and between tasks, switch changes that apply to the next task only,
 //! commands from an observer, and exact recall (forgetting 0 for `ours`).
 
-use quadcl::cl::Sequence;
-use quadcl::cl::{LambdaMode, Ours, SwitchOverrides, Switches};
+use quadcl::cl::{LambdaMode, Ours, Sequence, SwitchOverrides, Switches};
 use quadcl::config::net::MaskConfig;
-use quadcl::engine::ToyLearner;
-use quadcl::engine::{Command, CommandSender, Event, EventLog, Observer, Session, StepOutcome};
+use quadcl::engine::{Command, CommandSender, Event, EventLog, Observer, Session, StepOutcome, ToyLearner};
 
 fn sequence(text: &str) -> Sequence {
     toml::from_str(text).unwrap()

@@ -3,8 +3,7 @@
 //! bit-identical before and after; the new directory is a policy `quadcl
 //! eval` reads; a bad shift file or an unknown task is a clear error.
 
-use quadcl::engine::sim2real;
-use quadcl::engine::Shift;
+use quadcl::engine::{sim2real, Shift};
 use quadcl::headless::{run, RunOptions};
 use std::path::Path;
 

@@ -5,8 +5,7 @@
 
 mod nn_common;
 use nn_common::*;
-use quadcl::nn::row_quota;
-use quadcl::nn::MaskConfig;
+use quadcl::nn::{row_quota, MaskConfig};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

@@ -3,8 +3,7 @@
 
 mod rl_common;
 use quadcl::config::Config;
-use quadcl::rl::ToyEnv;
-use quadcl::rl::{Agent, PpoLearner, TrainEnv};
+use quadcl::rl::{Agent, PpoLearner, ToyEnv, TrainEnv};
 use rl_common::small_ppo_config;
 
 fn run(cfg: &Config, iterations: usize, seed: u64) -> Vec<quadcl::rl::Metrics> {

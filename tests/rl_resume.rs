@@ -6,9 +6,7 @@
 use candle_core::Tensor;
 use quadcl::config::{Config, PpoConfig};
 use quadcl::nn::ElementState;
-use quadcl::rl::load_policy;
-use quadcl::rl::ToyEnv;
-use quadcl::rl::{load_resume_point, train_from};
+use quadcl::rl::{load_policy, load_resume_point, train_from, ToyEnv};
 use quadcl::util::{derive_seed, Stream};
 
 fn toy_config(iterations: usize) -> Config {

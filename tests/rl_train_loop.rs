@@ -3,9 +3,7 @@
 
 mod rl_common;
 use quadcl::config::Config;
-use quadcl::rl::ToyEnv;
-use quadcl::rl::{evaluate, train, Agent, TrainEnv};
-use quadcl::rl::{load_policy, save_policy};
+use quadcl::rl::{evaluate, load_policy, save_policy, train, Agent, ToyEnv, TrainEnv};
 use rl_common::small_ppo_config;
 
 fn toy_config(iterations: usize) -> Config {

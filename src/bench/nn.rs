@@ -14,8 +14,7 @@
 //! and `nn_threads`.
 
 use candle_core::{Device, Tensor, Var};
-use quadcl::nn::fused_mlp;
-use quadcl::nn::{Activation, AdamConfig, MaskConfig, MaskedAdam, MaskedMlp, Param};
+use quadcl::nn::{fused_mlp, Activation, AdamConfig, MaskConfig, MaskedAdam, MaskedMlp, Param};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;

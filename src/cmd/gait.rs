@@ -5,8 +5,7 @@
 
 use clap::Args;
 use quadcl::rl::{record_gait, GaitReport, HeldCommand};
-use quadcl::sim::Perturbation;
-use quadcl::sim::RobotModel;
+use quadcl::sim::{Perturbation, RobotModel};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]

@@ -5,10 +5,8 @@
 //! (a channel, so a UI thread can pause a session that runs elsewhere).
 
 use super::learner::Evaluation;
-use crate::cl::TransferInit;
-use crate::cl::{SwitchOverrides, Switches};
-use crate::nn::MaskReport;
-use crate::nn::TaskId;
+use crate::cl::{SwitchOverrides, Switches, TransferInit};
+use crate::nn::{MaskReport, TaskId};
 use crate::rl::Metrics;
 use serde::Serialize;
 

@@ -8,8 +8,7 @@
 //! task; `save`/`load` capture everything needed to go on identically.
 
 use crate::config::net::MaskConfig;
-use crate::nn::MaskReport;
-use crate::nn::TaskId;
+use crate::nn::{MaskReport, TaskId};
 use crate::rl::{EvalReport, Metrics};
 use serde::{Deserialize, Serialize};
 use std::path::Path;

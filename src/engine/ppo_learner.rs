@@ -17,15 +17,10 @@ use super::learner::{Evaluation, Learner, TaskStart};
 use super::run_config::RunConfig;
 use crate::config::net::MaskConfig;
 use crate::config::{Config, EnvConfig};
-use crate::nn::checkpoint;
-use crate::nn::{mask_report, MaskReport};
-use crate::nn::{MaskedMlp, TaskId};
-use crate::rl::metric_names;
-use crate::rl::Metrics;
-use crate::rl::PolicyInfo;
-use crate::rl::SimTrainEnv;
-use crate::rl::TrainingClock;
-use crate::rl::{Agent, PpoLearner, RunningNormalizer, TrainEnv};
+use crate::nn::{checkpoint, mask_report, MaskReport, MaskedMlp, TaskId};
+use crate::rl::{
+    metric_names, Agent, Metrics, PolicyInfo, PpoLearner, RunningNormalizer, SimTrainEnv, TrainEnv, TrainingClock,
+};
 use crate::sim::Perturbation;
 use crate::util::{derive_seed, Stream};
 use anyhow::Context;

@@ -3,11 +3,9 @@
 //! body of `metrics.json`, and what `--resume` reads back.
 
 use super::learner::Evaluation;
-use crate::cl::Switches;
-use crate::cl::{forward_transfer, EvalMatrix};
+use crate::cl::{forward_transfer, EvalMatrix, Switches};
 use crate::nn::TaskId;
-use crate::rl::metric_names;
-use crate::rl::Metrics;
+use crate::rl::{metric_names, Metrics};
 use serde::{Deserialize, Serialize};
 
 /// One training step as it ran.

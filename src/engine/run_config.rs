@@ -20,8 +20,7 @@
 //! Every key is optional except the tasks; an unknown key is an error naming
 //! the file and the key.
 
-use crate::cl::{KnownBefore, Sequence};
-use crate::cl::{SwitchOverrides, Switches};
+use crate::cl::{KnownBefore, Sequence, SwitchOverrides, Switches};
 use crate::config::Config;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};

@@ -9,8 +9,7 @@
 //! both atomically, so an interruption at any moment leaves a folder that
 //! `--resume` continues from the last step `metrics.json` records.
 
-use super::learner::Evaluation;
-use super::learner::Learner;
+use super::learner::{Evaluation, Learner};
 use super::results::{SessionResults, StepRecord, Summary, TaskCurve};
 use crate::cl::EvalMatrix;
 use crate::util::{replace_dir, write_atomic};

@@ -15,8 +15,7 @@
 //! steps earlier (zeros at the start of an episode).
 
 use crate::config::EnvConfig;
-use crate::rl::VecStep;
-use crate::rl::{EnvDims, TrainEnv};
+use crate::rl::{EnvDims, TrainEnv, VecStep};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;

@@ -10,8 +10,7 @@
 use super::learner::{Evaluation, Learner, TaskStart};
 use super::ppo_learner::PpoTaskLearner;
 use super::shift::Shift;
-use crate::rl::metric_names;
-use crate::rl::{iteration_summary, progress_bar};
+use crate::rl::{iteration_summary, metric_names, progress_bar};
 use crate::util::{derive_seed, replace_dir, write_atomic, Stream};
 use serde::{Deserialize, Serialize};
 use std::path::Path;

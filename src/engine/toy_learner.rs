@@ -8,11 +8,8 @@
 
 use super::learner::{Evaluation, Learner, TaskStart};
 use crate::config::net::{Activation, MaskConfig};
-use crate::nn::checkpoint;
-use crate::nn::{mask_report, MaskReport};
-use crate::nn::{AdamConfig, MaskedAdam, MaskedMlp, TaskId};
-use crate::rl::metric_names;
-use crate::rl::{EvalReport, Metrics};
+use crate::nn::{checkpoint, mask_report, AdamConfig, MaskReport, MaskedAdam, MaskedMlp, TaskId};
+use crate::rl::{metric_names, EvalReport, Metrics};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use rand::{Rng, SeedableRng};
