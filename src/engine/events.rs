@@ -3,10 +3,12 @@
 //! [`Observer`]s: they receive owned-or-borrowed [`Event`]s and never compute
 //! a metric themselves. Commands come back through a [`CommandSender`]
 //! (a channel, so a UI thread can pause a session that runs elsewhere).
+//! [`ChannelObserver`] forwards every event to a channel (a UI on another thread).
 
 use super::learner::Evaluation;
-use crate::cl::{SwitchOverrides, Switches, TransferInit};
-use crate::nn::{MaskReport, TaskId};
+use super::results::Summary;
+use crate::cl::{EvalMatrix, SwitchOverrides, Switches, TaskSpec, TransferInit};
+use crate::nn::{LayerLift, LayerView, MaskReport, TaskId};
 use crate::rl::Metrics;
 use serde::Serialize;
 
@@ -33,6 +35,23 @@ pub enum Event {
     Evaluated { after_step: usize, evaluation: Evaluation },
     /// Mask statistics after training step `after_step`.
     MaskStats { after_step: usize, report: MaskReport },
+    /// The summary measures (METHOD.md 4) after training step `after_step`.
+    Measures { after_step: usize, eval_matrix: EvalMatrix, summary: Summary },
+    /// Every element of every layer as task `task` sees it ([`Command::WatchMasks`]);
+    /// `iteration` is set while the task trains (its live selection).
+    MaskViews { task: TaskId, iteration: Option<usize>, layers: Vec<LayerView> },
+    /// A finished task evaluated on request ([`Command::Evaluate`]), outside the matrix.
+    EvaluatedNow { evaluation: Evaluation },
+    /// The elements the transfer bonus would lift for a next task naming `related`.
+    TransferPreview { related: Vec<String>, layers: Vec<LayerLift> },
+    /// A task was added at the end of the sequence (as step `step`).
+    TaskAppended { step: usize, spec: TaskSpec },
+    /// A command could not be carried out; the session goes on unchanged.
+    CommandRejected { command: String, error: String },
+    /// Training failed; the session stops (completed steps are kept).
+    Failed { error: String },
+    /// The session was stopped ([`Command::Stop`]).
+    Stopped { step: usize, iteration: usize },
     /// The session paused (between or inside tasks).
     Paused { step: usize, iteration: usize },
     /// The session resumed.
@@ -61,10 +80,32 @@ pub enum Command {
     SetNextSwitches(SwitchOverrides),
     /// Change the next task's related tasks and initialisation (METHOD.md 2.6).
     SetNextTransfer { related: Vec<String>, init: TransferInit },
+    /// Evaluate a finished task now (answered by [`Event::EvaluatedNow`]).
+    Evaluate(String),
+    /// Report the element views of a task now, after each task, and every few
+    /// iterations while it trains (answered by [`Event::MaskViews`]).
+    WatchMasks(String),
+    /// Preview the transfer bonus of these related tasks (answered by [`Event::TransferPreview`]).
+    PreviewTransfer(Vec<String>),
+    /// Add a task at the end of the sequence (validated as a run file's entry).
+    AppendTask(TaskSpec),
+    /// Write the results now (a runner's business; see `engine::Runner`).
+    Save,
+    /// Stop: the task in progress is abandoned (a resume retrains it from its start).
+    Stop,
 }
 
 /// The sending end of a session's command channel.
 pub type CommandSender = std::sync::mpsc::Sender<Command>;
+
+/// Forwards every event to a channel; a receiver that has gone is ignored.
+pub struct ChannelObserver(pub std::sync::mpsc::Sender<Event>);
+
+impl Observer for ChannelObserver {
+    fn on_event(&mut self, event: &Event) {
+        let _ = self.0.send(event.clone());
+    }
+}
 
 /// Collects every event (tests, recorders that write at the end).
 #[derive(Debug, Default, Clone)]

@@ -8,7 +8,7 @@
 //! task; `save`/`load` capture everything needed to go on identically.
 
 use crate::config::net::MaskConfig;
-use crate::nn::{MaskReport, TaskId};
+use crate::nn::{LayerLift, LayerView, MaskReport, TaskId};
 use crate::rl::{EvalReport, Metrics};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -58,6 +58,10 @@ pub trait Learner: Send {
     fn evaluate(&mut self, task: TaskId, name: &str, seed: u64) -> anyhow::Result<Evaluation>;
     /// Per network, layer and task: the mask statistics (`tasks[t]` names task t).
     fn mask_report(&self, tasks: &[String]) -> MaskReport;
+    /// Every element of every layer as task `task` sees it (its live selection while it trains).
+    fn mask_views(&self, task: TaskId) -> Vec<LayerView>;
+    /// Per layer, the elements the transfer bonus would lift for a new task naming `related`.
+    fn transfer_lift(&self, related: &[TaskId]) -> Vec<LayerLift>;
     /// Writes everything needed to recall every finished task and to go on
     /// training identically (between tasks only) into the directory `dir`.
     fn save(&self, dir: &Path, tasks: &[String]) -> anyhow::Result<()>;

@@ -17,7 +17,9 @@ use super::learner::{Evaluation, Learner, TaskStart};
 use super::run_config::RunConfig;
 use crate::config::net::MaskConfig;
 use crate::config::{Config, EnvConfig};
-use crate::nn::{checkpoint, mask_report, MaskReport, MaskedMlp, TaskId};
+use crate::nn::{
+    checkpoint, mask_report, mask_views, transfer_lift, LayerLift, LayerView, MaskReport, MaskedMlp, TaskId,
+};
 use crate::rl::{
     metric_names, Agent, Metrics, PolicyInfo, PpoLearner, RunningNormalizer, SimTrainEnv, TrainEnv, TrainingClock,
 };
@@ -239,6 +241,14 @@ impl Learner for PpoTaskLearner {
 
     fn mask_report(&self, tasks: &[String]) -> MaskReport {
         mask_report(tasks, &self.agent_ref().networks())
+    }
+
+    fn mask_views(&self, task: TaskId) -> Vec<LayerView> {
+        mask_views(&self.agent_ref().networks(), task)
+    }
+
+    fn transfer_lift(&self, related: &[TaskId]) -> Vec<LayerLift> {
+        transfer_lift(&self.agent_ref().networks(), related)
     }
 
     fn save(&self, dir: &Path, tasks: &[String]) -> anyhow::Result<()> {

@@ -8,7 +8,10 @@
 
 use super::learner::{Evaluation, Learner, TaskStart};
 use crate::config::net::{Activation, MaskConfig};
-use crate::nn::{checkpoint, mask_report, AdamConfig, MaskReport, MaskedAdam, MaskedMlp, TaskId};
+use crate::nn::{
+    checkpoint, mask_report, mask_views, transfer_lift, AdamConfig, LayerLift, LayerView, MaskReport, MaskedAdam,
+    MaskedMlp, TaskId,
+};
 use crate::rl::{metric_names, EvalReport, Metrics};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
@@ -135,6 +138,14 @@ impl Learner for ToyLearner {
 
     fn mask_report(&self, tasks: &[String]) -> MaskReport {
         mask_report(tasks, &[&self.net])
+    }
+
+    fn mask_views(&self, task: TaskId) -> Vec<LayerView> {
+        mask_views(&[&self.net], task)
+    }
+
+    fn transfer_lift(&self, related: &[TaskId]) -> Vec<LayerLift> {
+        transfer_lift(&[&self.net], related)
     }
 
     fn save(&self, dir: &Path, tasks: &[String]) -> anyhow::Result<()> {

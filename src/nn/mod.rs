@@ -9,11 +9,13 @@
 //! - `activation`: a fused ELU as candle custom ops (layer-by-layer reference path);
 //! - `optim`: [`MaskedAdam`], which never moves a frozen element;
 //! - [`checkpoint`]: policy directories (safetensors + bit-packed masks + manifest);
-//! - `stats`: the mask statistics printed by `quadcl masks`.
+//! - `stats`: the mask statistics printed by `quadcl masks`;
+//! - `element_view`: every element as one task sees it (the TUI's heatmap), the transfer preview.
 
 mod activation;
 mod bitmask;
 pub mod checkpoint;
+mod element_view;
 mod fused;
 mod masked;
 mod mlp;
@@ -25,6 +27,7 @@ mod stats;
 pub use crate::config::net::{Activation, MaskConfig, SelectionRule};
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};
+pub use element_view::{mask_views, transfer_lift, ElementView, LayerLift, LayerView};
 pub use fused::fused_mlp;
 pub use masked::MaskedLinear;
 pub use mlp::MaskedMlp;

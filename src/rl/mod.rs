@@ -48,7 +48,7 @@ pub use policy_dir::{
     PolicyInfo, PolicyOrCheckpoint,
 };
 pub use ppo::PpoLearner;
-pub use progress::{iteration_summary, progress_bar, TrainingClock};
+pub use progress::{iteration_line, iteration_summary, progress_bar, TrainingClock};
 pub use sim_env::SimTrainEnv;
 pub use toy_env::ToyEnv;
 pub use trainer::{load_resume_point, train, train_from, TrainSummary, TrainerState};

@@ -42,6 +42,12 @@ pub fn iteration_summary(metrics: &Metrics) -> String {
     line
 }
 
+/// The echo line of iteration `iteration` (1-based) of `iterations` of step `step`:
+/// `step 0 iteration 25/500: return 3.21 lin_vel_err 0.410 ...` (see [`iteration_summary`]).
+pub fn iteration_line(step: usize, iteration: usize, iterations: usize, metrics: &Metrics) -> String {
+    format!("step {step} iteration {iteration}/{iterations}: {}", iteration_summary(metrics))
+}
+
 /// Environment steps and wall-clock seconds of one training run so far,
 /// stamped on each iteration's metrics as `charts/env_steps` and `time/wall_s`.
 /// A resumed run starts from the counts it had reached.
@@ -79,6 +85,16 @@ impl TrainingClock {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_iteration_line_names_step_and_iteration() {
+        let metrics =
+            [("charts/episodic_return".to_string(), 3.214), ("charts/SPS".to_string(), 3301.7)].into_iter().collect();
+        assert_eq!(
+            iteration_line(1, 25, 500, &metrics),
+            "step 1 iteration 25/500: return 3.21 lin_vel_err - ang_vel_err - fall_rate - SPS 3302"
+        );
+    }
 
     #[test]
     fn the_iteration_summary_shows_missing_figures_as_a_dash() {

@@ -1,11 +1,16 @@
 //! What observers and a UI ask of a running session, between iterations:
-//! pause and resume, and the next task's switches and forward-transfer
-//! initialisation (queued: the task in progress keeps its settings). Commands
-//! sent on the session's channel arrive here too.
+//! pause and resume, stop, the next task's switches and forward-transfer
+//! initialisation (queued: the task in progress keeps its settings), a task
+//! added at the end, an evaluation or the element views of a task now.
+//! Commands sent on the session's channel arrive here too; one that cannot be
+//! carried out is announced ([`Event::CommandRejected`]) and changes nothing.
+//! While paused, [`Session::wait_for_command`] blocks on the channel.
 
 use super::Session;
-use crate::cl::{SwitchOverrides, Switches, TransferInit};
+use crate::cl::{KnownBefore, SwitchOverrides, Switches, TaskSpec, TransferInit};
 use crate::engine::events::{Command, Event};
+use crate::nn::TaskId;
+use anyhow::Context;
 
 impl Session {
     /// The switches the next task to start will use (its sequence entry and queued changes applied).
@@ -71,15 +76,112 @@ impl Session {
         self.in_progress.as_ref().map_or((self.completed_steps(), 0), |p| (p.record.step, p.iteration))
     }
 
-    pub(super) fn drain_commands(&mut self) -> anyhow::Result<()> {
-        while let Ok(c) = self.commands.try_recv() {
-            match c {
-                Command::Pause => self.pause(),
-                Command::Resume => self.resume(),
-                Command::SetNextSwitches(o) => self.set_next_switches(o)?,
-                Command::SetNextTransfer { related, init } => self.set_next_transfer(related, init)?,
-            }
+    /// Stops: nothing more trains; the task in progress is abandoned.
+    pub fn stop(&mut self) {
+        if !self.stopped {
+            self.stopped = true;
+            let (step, iteration) = self.position();
+            self.emit(Event::Stopped { step, iteration });
         }
+    }
+
+    /// Whether the session was stopped (or failed).
+    pub fn is_stopped(&self) -> bool {
+        self.stopped
+    }
+
+    /// Whether a [`Command::Save`] came since the last call (a runner writes then).
+    pub fn take_save_request(&mut self) -> bool {
+        std::mem::take(&mut self.save_requested)
+    }
+
+    /// Blocks until the next command arrives on the channel and carries it out
+    /// (a paused UI session waits here, not in a polling loop).
+    pub fn wait_for_command(&mut self) {
+        if let Ok(c) = self.commands.recv() {
+            self.apply(c);
+        }
+        self.drain_commands();
+    }
+
+    /// Adds a task at the end of the sequence: its name must parse and its related
+    /// tasks be learned or earlier in the sequence. A new name gets the next task id.
+    pub fn append_task(&mut self, spec: TaskSpec) -> anyhow::Result<()> {
+        let mut sequence = self.sequence.clone();
+        sequence.tasks.push(spec.clone());
+        let known: Vec<String> =
+            (0..self.finished.len()).filter(|&t| self.finished[t]).map(|t| self.results.tasks[t].clone()).collect();
+        sequence.validate_with(KnownBefore::Tasks(known))?;
+        if !self.results.tasks.contains(&spec.name) {
+            self.results.tasks.push(spec.name.clone());
+            self.results.eval_matrix.tasks.push(spec.name.clone());
+            self.results.eval_matrix.rows.iter_mut().for_each(|r| r.push(None));
+            self.finished.push(false);
+        }
+        self.sequence = sequence;
+        self.emit(Event::TaskAppended { step: self.sequence.tasks.len() - 1, spec });
         Ok(())
+    }
+
+    /// Starts reporting the element views of task `name` (now, after each task, while it trains).
+    pub fn watch_masks(&mut self, name: &str) -> anyhow::Result<()> {
+        let task = self.task_id(name)?;
+        self.watched = Some(task);
+        let live = self.in_progress.as_ref().filter(|p| p.record.task == task).map(|p| p.iteration);
+        let layers = self.learner.mask_views(task);
+        self.emit(Event::MaskViews { task, iteration: live, layers });
+        Ok(())
+    }
+
+    /// Reports how many elements per layer the transfer bonus of `related` would lift.
+    pub fn preview_transfer(&mut self, related: Vec<String>) -> anyhow::Result<()> {
+        let ids: Vec<TaskId> = related.iter().map(|n| self.task_id(n)).collect::<anyhow::Result<_>>()?;
+        let layers = self.learner.transfer_lift(&ids);
+        self.emit(Event::TransferPreview { related, layers });
+        Ok(())
+    }
+
+    fn evaluate_now(&mut self, name: &str) -> anyhow::Result<()> {
+        let task = self.task_id(name)?;
+        anyhow::ensure!(
+            self.in_progress.is_none(),
+            "{name} is evaluated between tasks (a task is training; after it every learned task is evaluated)"
+        );
+        let evaluation = self.evaluate(task)?;
+        self.emit(Event::EvaluatedNow { evaluation });
+        Ok(())
+    }
+
+    fn task_id(&self, name: &str) -> anyhow::Result<TaskId> {
+        self.results
+            .tasks
+            .iter()
+            .position(|t| t == name)
+            .with_context(|| format!("no task {name:?} in this run (tasks: {:?})", self.results.tasks))
+    }
+
+    fn apply(&mut self, c: Command) {
+        let label = format!("{c:?}");
+        let result = match c {
+            Command::Pause => Ok(self.pause()),
+            Command::Resume => Ok(self.resume()),
+            Command::Stop => Ok(self.stop()),
+            Command::Save => Ok(self.save_requested = true),
+            Command::SetNextSwitches(o) => self.set_next_switches(o),
+            Command::SetNextTransfer { related, init } => self.set_next_transfer(related, init),
+            Command::Evaluate(name) => self.evaluate_now(&name),
+            Command::WatchMasks(name) => self.watch_masks(&name),
+            Command::PreviewTransfer(related) => self.preview_transfer(related),
+            Command::AppendTask(spec) => self.append_task(spec),
+        };
+        if let Err(e) = result {
+            self.emit(Event::CommandRejected { command: label, error: format!("{e:#}") });
+        }
+    }
+
+    pub(super) fn drain_commands(&mut self) {
+        while let Ok(c) = self.commands.try_recv() {
+            self.apply(c);
+        }
     }
 }

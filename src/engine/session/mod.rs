@@ -16,11 +16,12 @@
 //! never stopped.
 
 mod controls;
+mod restore;
 
 use super::events::{Command, CommandSender, Event, Observer};
 use super::learner::{Learner, TaskStart};
 use super::results::{SessionResults, StepRecord, TaskCurve};
-use crate::cl::{ContinualMethod, EvalMatrix, KnownBefore, Sequence, SwitchOverrides, Switches, TransferInit};
+use crate::cl::{ContinualMethod, EvalMatrix, Sequence, SwitchOverrides, Switches, TransferInit};
 use crate::config::net::MaskConfig;
 use crate::nn::TaskId;
 use crate::util::{derive_seed, Stream};
@@ -28,7 +29,6 @@ use anyhow::Context;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use std::path::Path;
 use std::sync::mpsc::{channel, Receiver};
 
 /// What one call of [`Session::step_iteration`] did.
@@ -42,7 +42,12 @@ pub enum StepOutcome {
     TaskFinished { step: usize },
     /// Every step of the sequence is done.
     SequenceDone,
+    /// The session was stopped ([`Command::Stop`]); nothing more trains.
+    Stopped,
 }
+
+/// While a watched task trains, its element views are reported every this many iterations.
+const MASK_VIEWS_EVERY: usize = 10;
 
 struct InProgress {
     record: StepRecord,
@@ -64,6 +69,14 @@ pub struct Session {
     /// Related tasks and init mode for the next task, replacing its sequence entry's.
     queued_transfer: Option<(Vec<String>, TransferInit)>,
     paused: bool,
+    /// Set by [`Command::Stop`]: nothing more is trained.
+    stopped: bool,
+    /// Set by [`Command::Save`] until a runner takes it.
+    save_requested: bool,
+    /// The task whose element views are reported ([`Command::WatchMasks`]).
+    watched: Option<TaskId>,
+    /// From-scratch curves by task name, for forward transfer in [`Event::Measures`].
+    reference: std::collections::BTreeMap<String, Vec<f64>>,
     observers: Vec<Box<dyn Observer>>,
     commands: Receiver<Command>,
     sender: CommandSender,
@@ -104,82 +117,15 @@ impl Session {
             queued: SwitchOverrides::default(),
             queued_transfer: None,
             paused: false,
+            stopped: false,
+            save_requested: false,
+            watched: None,
+            reference: Default::default(),
             observers: Vec::new(),
             commands,
             sender,
             results,
         })
-    }
-
-    /// Declares tasks the learner already knows before the sequence starts
-    /// (a base policy's): they come first among the task ids and columns, count
-    /// as finished (a sequence entry naming one repeats it, METHOD.md 2.5)
-    /// and are evaluated after every step. Only before any training.
-    pub fn with_learned_tasks(mut self, learned: &[String]) -> anyhow::Result<Self> {
-        anyhow::ensure!(
-            self.results.steps.is_empty() && self.in_progress.is_none(),
-            "learned tasks are declared before training"
-        );
-        self.sequence.validate_with(KnownBefore::Tasks(learned.to_vec()))?;
-        let mut tasks = learned.to_vec();
-        for t in self.sequence.distinct_tasks() {
-            if !tasks.contains(&t) {
-                tasks.push(t);
-            }
-        }
-        self.finished = (0..tasks.len()).map(|i| i < learned.len()).collect();
-        self.results.eval_matrix = EvalMatrix::new(tasks.clone());
-        self.results.tasks = tasks;
-        Ok(self)
-    }
-
-    /// Continues from `results` (the steps completed so far) and the learner
-    /// state saved after the last of them in `checkpoint`. Errors (a corrupt
-    /// checkpoint, results from another sequence) leave the session untouched.
-    pub fn restore(&mut self, results: SessionResults, checkpoint: &Path) -> anyhow::Result<()> {
-        anyhow::ensure!(
-            self.in_progress.is_none() && self.results.steps.is_empty(),
-            "restore: the session has already trained"
-        );
-        anyhow::ensure!(
-            results.tasks == self.results.tasks,
-            "the saved results are for tasks {:?}, the sequence has {:?}",
-            results.tasks,
-            self.results.tasks
-        );
-        let done = results.steps.len();
-        anyhow::ensure!(
-            done <= self.sequence.tasks.len(),
-            "the saved results have {done} steps, the sequence only {}",
-            self.sequence.tasks.len()
-        );
-        for (i, s) in results.steps.iter().enumerate() {
-            anyhow::ensure!(
-                s.step == i && s.name == self.sequence.tasks[i].name,
-                "saved step {i} ({}) does not match the sequence ({})",
-                s.name,
-                self.sequence.tasks[i].name
-            );
-        }
-        anyhow::ensure!(
-            results.eval_matrix.rows.len() == done && results.curves.len() == done && results.evaluations.len() == done,
-            "the saved results are inconsistent: {done} steps, {} matrix rows, {} curves, {} evaluation rows",
-            results.eval_matrix.rows.len(),
-            results.curves.len(),
-            results.evaluations.len()
-        );
-        if done > 0 {
-            let names = self.learner.load(checkpoint)?;
-            anyhow::ensure!(
-                names == self.results.tasks,
-                "{}: checkpoint tasks {names:?} differ from the sequence's {:?}",
-                checkpoint.display(),
-                self.results.tasks
-            );
-        }
-        results.steps.iter().for_each(|s| self.finished[s.task] = true);
-        self.results = results;
-        Ok(())
     }
 
     /// Adds an observer; it receives every later event.
@@ -227,6 +173,11 @@ impl Session {
         self.paused
     }
 
+    /// Uses `reference` (from-scratch curves by task name) for forward transfer in [`Event::Measures`].
+    pub fn set_reference(&mut self, reference: std::collections::BTreeMap<String, Vec<f64>>) {
+        self.reference = reference;
+    }
+
     /// Tells every observer.
     fn emit(&mut self, event: Event) {
         for o in &mut self.observers {
@@ -236,8 +187,21 @@ impl Session {
 
     /// Runs one training iteration (starting the next task first when none is in
     /// progress, ending and evaluating it after its last iteration).
+    /// A failure is announced ([`Event::Failed`]) and stops the session; completed steps stay.
     pub fn step_iteration(&mut self) -> anyhow::Result<StepOutcome> {
-        self.drain_commands()?;
+        let outcome = self.try_step_iteration();
+        if let Err(e) = &outcome {
+            self.stopped = true;
+            self.emit(Event::Failed { error: format!("{e:#}") });
+        }
+        outcome
+    }
+
+    fn try_step_iteration(&mut self) -> anyhow::Result<StepOutcome> {
+        self.drain_commands();
+        if self.stopped {
+            return Ok(StepOutcome::Stopped);
+        }
         if self.paused {
             return Ok(StepOutcome::Paused);
         }
@@ -254,6 +218,10 @@ impl Session {
         let (step, task, iteration, iterations) = (p.record.step, p.record.task, p.iteration, p.record.iterations);
         self.method.after_iteration(task, &metrics)?;
         self.emit(Event::Iteration { step, task, iteration, iterations, metrics });
+        if self.watched == Some(task) && iteration % MASK_VIEWS_EVERY == 0 && iteration < iterations {
+            let layers = self.learner.mask_views(task);
+            self.emit(Event::MaskViews { task, iteration: Some(iteration), layers });
+        }
         if iteration < iterations {
             return Ok(StepOutcome::Iterated { step, iteration });
         }
@@ -381,6 +349,13 @@ impl Session {
         self.results.steps.push(p.record);
         let report = self.learner.mask_report(&self.results.tasks);
         self.emit(Event::MaskStats { after_step: step, report });
+        let reference = |name: &str| self.reference.get(name).cloned();
+        let (eval_matrix, summary) = (self.results.eval_matrix.clone(), self.results.summary(&reference));
+        self.emit(Event::Measures { after_step: step, eval_matrix, summary });
+        if let Some(t) = self.watched {
+            let layers = self.learner.mask_views(t);
+            self.emit(Event::MaskViews { task: t, iteration: None, layers });
+        }
         if self.is_done() {
             self.emit(Event::SequenceFinished { steps: self.completed_steps() });
         }

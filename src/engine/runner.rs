@@ -1,0 +1,352 @@
+//! A session bound to its run folder: what `quadcl run` and the workbench
+//! both use, so the folder is written the same way whoever drives it.
+//!
+//! [`Runner::open`] builds the learner from a run file, restores a stopped run
+//! (`--resume`), and writes `run.toml` and `metrics.json` before anything
+//! trains; [`Runner::continue_run`] starts a folder from a shorter run whose
+//! steps begin the run file's sequence (the workbench continues the shipped
+//! 4-task run with the rest of the 12-task sequence). After every task the
+//! checkpoint, then `metrics.json`, then `log.txt` are written atomically (see
+//! `run_dir`). Tasks added to the sequence on the way are appended to
+//! `run.toml`, so a reopened folder has them. [`Runner::train`] runs headless
+//! to the end; [`Runner::serve`] waits for commands (a UI's worker thread).
+
+use super::events::{Event, Observer};
+use super::learner::Learner;
+use super::run_config::{LearnerKind, RunConfig};
+use super::run_dir::{MetricsFile, RunDir, RUN_FILE};
+use super::session::{Session, StepOutcome};
+use super::toy_learner::ToyLearner;
+use crate::cl::TaskSpec;
+use crate::util::{replace_dir, write_atomic};
+use anyhow::Context;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// How [`Runner::open`] treats the output folder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OpenMode {
+    /// A new run: the folder must not hold one.
+    New,
+    /// Continue the run in the folder from its last completed task.
+    Resume,
+    /// Continue the run in the folder if it holds one, else start it.
+    ResumeOrNew,
+}
+
+/// The learner a run file asks for, with the base policy's tasks it already knows.
+pub fn make_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<String>)> {
+    let mask = cfg.switches.apply(&cfg.config.net.mask)?;
+    match cfg.run.learner {
+        LearnerKind::Toy => {
+            let mut learner = ToyLearner::new(&mask, cfg.config.seed)?;
+            let learned = match &cfg.run.base_policy {
+                Some(dir) => learner.load(dir).with_context(|| format!("loading the base policy {}", dir.display()))?,
+                None => Vec::new(),
+            };
+            Ok((Box::new(learner), learned))
+        }
+        LearnerKind::Ppo => super::make_ppo_learner(cfg),
+    }
+}
+
+/// A session, its run folder and its log.
+pub struct Runner {
+    session: Session,
+    dir: RunDir,
+    run_text: String,
+    /// Sequence entries `run.toml` holds.
+    written_tasks: usize,
+    reference: Option<MetricsFile>,
+    keep_last_checkpoint_only: bool,
+    lines: Arc<Mutex<String>>,
+}
+
+impl Runner {
+    /// Opens the run file `config` into `out` (see [`OpenMode`]). Every check (config,
+    /// existing results, checkpoint) happens before anything is written. `echo`: log lines go to stderr too.
+    pub fn open(config: &Path, out: &Path, mode: OpenMode, echo: bool) -> anyhow::Result<Self> {
+        let dir = RunDir::new(out);
+        let resume = match mode {
+            OpenMode::New => {
+                anyhow::ensure!(
+                    !dir.has_run(),
+                    "{} already holds a run: use --resume to continue it, or another --out",
+                    out.display()
+                );
+                false
+            }
+            OpenMode::Resume => true,
+            OpenMode::ResumeOrNew => dir.has_run(),
+        };
+        let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
+        let cfg = RunConfig::load(config)?;
+        let previous = if resume {
+            let stored = RunConfig::load(&out.join(RUN_FILE))
+                .with_context(|| format!("--resume: {} holds no readable run", out.display()))?;
+            anyhow::ensure!(
+                stored == cfg,
+                "--resume: {} differs from the run in {} (its {RUN_FILE}); start a new --out instead",
+                config.display(),
+                out.display()
+            );
+            Some(MetricsFile::load(&dir.metrics_path())?)
+        } else {
+            None
+        };
+        let mut runner = Self::build(&cfg, text, dir, echo)?;
+        match previous {
+            Some(prev) => {
+                let checkpoint = match prev.completed_steps {
+                    0 => out.to_path_buf(),
+                    n => runner.dir.checkpoint(n - 1, &prev.steps[n - 1].name),
+                };
+                runner.session.restore(prev.results(), &checkpoint).context("--resume")?;
+            }
+            None => runner.write_start()?,
+        }
+        Ok(runner)
+    }
+
+    /// Starts `out` as the continuation of the finished or stopped run in `prior`
+    /// by the run file `config`: `prior`'s steps must be the first steps of
+    /// `config`'s sequence and its run file must train the same way (config, method, base).
+    /// Its results and last checkpoint are copied; `prior` is only read.
+    pub fn continue_run(prior: &Path, config: &Path, out: &Path, echo: bool) -> anyhow::Result<Self> {
+        let dir = RunDir::new(out);
+        anyhow::ensure!(!dir.has_run(), "{} already holds a run: open it instead", out.display());
+        let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
+        let cfg = RunConfig::load(config)?;
+        let prior_cfg = RunConfig::load(&prior.join(RUN_FILE))?;
+        for (what, same) in [
+            ("seed, [env], [net] or [ppo]", cfg.config == prior_cfg.config),
+            ("[method]", cfg.method == prior_cfg.method && cfg.switches == prior_cfg.switches),
+            (
+                "[run] base_policy or learner",
+                cfg.run.base_policy == prior_cfg.run.base_policy && cfg.run.learner == prior_cfg.run.learner,
+            ),
+        ] {
+            anyhow::ensure!(same, "{} cannot continue {}: their {what} differ", config.display(), prior.display());
+        }
+        let prev = MetricsFile::load(&prior.join(super::run_dir::METRICS_FILE))?;
+        let done = prev.completed_steps;
+        anyhow::ensure!(done > 0, "{} has no completed step to continue", prior.display());
+        let source = RunDir::new(prior).checkpoint(done - 1, &prev.steps[done - 1].name);
+        let mut runner = Self::build(&cfg, text, dir, echo)?;
+        runner.session.restore(prev.results(), &source).with_context(|| format!("continuing {}", prior.display()))?;
+        let target = runner.dir.checkpoint(done - 1, &prev.steps[done - 1].name);
+        replace_dir(&target, |fresh| copy_files(&source, fresh))?;
+        runner.write_start()?;
+        let log = std::fs::read_to_string(prior.join(super::run_dir::LOG_FILE)).unwrap_or_default();
+        if let Ok(mut l) = runner.lines.lock() {
+            *l = format!("{log}continued from {} after {done} steps\n", prior.display());
+        }
+        runner.dir.write_log(&runner.log_text())?;
+        Ok(runner)
+    }
+
+    fn build(cfg: &RunConfig, run_text: String, dir: RunDir, echo: bool) -> anyhow::Result<Self> {
+        let reference = match &cfg.run.reference {
+            Some(p) => Some(MetricsFile::load(p).context("the [run] reference")?),
+            None => None,
+        };
+        let (learner, learned) = make_learner(cfg)?;
+        let method = crate::cl::method_by_name(&cfg.method)?;
+        let mut session = Session::new(
+            learner,
+            method,
+            cfg.sequence.clone(),
+            cfg.config.net.mask.clone(),
+            cfg.switches.clone(),
+            cfg.config.seed,
+        )?
+        .with_learned_tasks(&learned)?;
+        if let Some(r) = &reference {
+            let curves: BTreeMap<String, Vec<f64>> =
+                session.results().tasks.iter().filter_map(|t| Some((t.clone(), r.reference_curve(t)?))).collect();
+            session.set_reference(curves);
+        }
+        let lines = Arc::new(Mutex::new(dir.read_log()));
+        session.add_observer(Box::new(LogObserver { lines: lines.clone(), echo }));
+        Ok(Self {
+            written_tasks: cfg.sequence.tasks.len(),
+            session,
+            dir,
+            run_text,
+            reference,
+            keep_last_checkpoint_only: cfg.run.keep_last_checkpoint_only,
+            lines,
+        })
+    }
+
+    fn write_start(&self) -> anyhow::Result<()> {
+        write_atomic(&self.dir.root.join(RUN_FILE), self.run_text.as_bytes())?;
+        self.dir.write_metrics(&self.metrics())
+    }
+
+    /// The session (to add observers, take a command sender, read results).
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+
+    /// The session, mutably.
+    pub fn session_mut(&mut self) -> &mut Session {
+        &mut self.session
+    }
+
+    /// The run folder.
+    pub fn root(&self) -> &Path {
+        &self.dir.root
+    }
+
+    /// The path of the newest checkpoint (the policy that recalls every learned task), if any.
+    pub fn last_checkpoint(&self) -> Option<PathBuf> {
+        let steps = &self.session.results().steps;
+        steps.last().map(|s| self.dir.checkpoint(s.step, &s.name))
+    }
+
+    /// `metrics.json` as it stands.
+    pub fn metrics(&self) -> MetricsFile {
+        let reference = |name: &str| self.reference.as_ref().and_then(|r| r.reference_curve(name));
+        MetricsFile::new(self.session.results(), self.session.sequence().tasks.len(), &reference)
+    }
+
+    fn log_text(&self) -> String {
+        self.lines.lock().map(|l| l.clone()).unwrap_or_default()
+    }
+
+    /// Writes what is not yet on disk: tasks added to the sequence (into `run.toml`),
+    /// `metrics.json` and the log. A task in progress is not saved (a resume retrains it).
+    pub fn save(&mut self) -> anyhow::Result<()> {
+        let tasks = &self.session.sequence().tasks;
+        if tasks.len() > self.written_tasks {
+            self.run_text.push_str(&appended_tasks(&tasks[self.written_tasks..])?);
+            write_atomic(&self.dir.root.join(RUN_FILE), self.run_text.as_bytes())?;
+            self.written_tasks = tasks.len();
+        }
+        self.dir.write_metrics(&self.metrics())?;
+        self.dir.write_log(&self.log_text())
+    }
+
+    /// After step `step` finished: its checkpoint, then `metrics.json` (then the older checkpoint
+    /// goes, if only the last is kept), then the log.
+    fn after_task(&mut self, step: usize) -> anyhow::Result<()> {
+        let results = self.session.results();
+        let name = &results.steps[step].name;
+        self.dir.write_checkpoint(step, name, self.session.learner(), &results.tasks)?;
+        self.save()?;
+        let results = self.session.results();
+        if self.keep_last_checkpoint_only && step > 0 {
+            let previous = self.dir.checkpoint(step - 1, &results.steps[step - 1].name);
+            if previous.exists() {
+                std::fs::remove_dir_all(&previous).with_context(|| format!("removing {}", previous.display()))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Trains until the sequence ends, the session pauses or stops, or `stop_after`
+    /// more tasks have finished; writes after every task.
+    pub fn train(&mut self, stop_after: Option<usize>) -> anyhow::Result<StepOutcome> {
+        let mut trained = 0;
+        loop {
+            if stop_after == Some(trained) {
+                return Ok(StepOutcome::Paused);
+            }
+            match self.session.train_next_task()? {
+                StepOutcome::TaskFinished { step } => {
+                    self.after_task(step)?;
+                    trained += 1;
+                }
+                other => return Ok(other),
+            }
+        }
+    }
+
+    /// Serves a UI until [`crate::engine::Command::Stop`]: trains while resumed, blocks on the
+    /// command channel while paused, pauses at the end of the sequence (a task may
+    /// still be added), writes after every task and on [`crate::engine::Command::Save`].
+    /// On stop the results are written once more.
+    pub fn serve(&mut self) -> anyhow::Result<()> {
+        loop {
+            if self.session.take_save_request() {
+                self.save()?;
+            }
+            if self.session.is_stopped() {
+                return self.save();
+            }
+            if self.session.is_paused() {
+                self.session.wait_for_command();
+                continue;
+            }
+            match self.session.step_iteration()? {
+                StepOutcome::TaskFinished { step } => self.after_task(step)?,
+                StepOutcome::SequenceDone => self.session.pause(),
+                StepOutcome::Iterated { .. } | StepOutcome::Paused | StepOutcome::Stopped => {}
+            }
+        }
+    }
+}
+
+/// The `[[task]]` tables of `tasks`, to append to a run file.
+fn appended_tasks(tasks: &[TaskSpec]) -> anyhow::Result<String> {
+    #[derive(serde::Serialize)]
+    struct Tasks<'a> {
+        task: &'a [TaskSpec],
+    }
+    Ok(format!("\n# Added in the workbench:\n{}", toml::to_string(&Tasks { task: tasks })?))
+}
+
+fn copy_files(from: &Path, to: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(to).with_context(|| format!("creating {}", to.display()))?;
+    for entry in std::fs::read_dir(from).with_context(|| format!("reading {}", from.display()))? {
+        let path = entry?.path();
+        if path.is_file() {
+            let target = to.join(path.file_name().unwrap_or_default());
+            std::fs::copy(&path, &target).with_context(|| format!("copying {}", path.display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// One line per task-level event, kept for `log.txt` (and echoed to stderr
+/// when asked, e.g. under nohup where there is no progress bar).
+struct LogObserver {
+    lines: Arc<Mutex<String>>,
+    echo: bool,
+}
+
+/// When echoing, every this many iterations a line on stderr says
+/// where training is, so a long run can be followed with `tail -f`.
+const ECHO_EVERY: usize = 25;
+
+impl Observer for LogObserver {
+    fn on_event(&mut self, event: &Event) {
+        let line = match event {
+            Event::Iteration { step, iteration, iterations, metrics, .. } => {
+                if self.echo && (iteration % ECHO_EVERY == 0 || iteration == iterations) {
+                    eprintln!("{}", crate::rl::iteration_line(*step, *iteration, *iterations, metrics));
+                }
+                return;
+            }
+            Event::MaskStats { .. }
+            | Event::MaskViews { .. }
+            | Event::Measures { .. }
+            | Event::TransferPreview { .. }
+            | Event::EvaluatedNow { .. } => return,
+            Event::Evaluated { after_step, evaluation: e } => format!(
+                "after step {after_step}: {} performance {:.4} return {:.3} lin_vel_err {:.3} ang_vel_err {:.3} fall_rate {:.3}",
+                e.report.task, e.performance, e.report.mean_return, e.report.lin_vel_err, e.report.ang_vel_err, e.report.fall_rate
+            ),
+            other => serde_json::to_string(other).unwrap_or_default(),
+        };
+        if self.echo {
+            eprintln!("{line}");
+        }
+        if let Ok(mut l) = self.lines.lock() {
+            l.push_str(&line);
+            l.push('\n');
+        }
+    }
+}

@@ -1,0 +1,139 @@
+//! Every element of a masked layer as one task sees it (the TUI's mask
+//! heatmap draws these codes; the per-layer counts are in `stats`):
+//! vacant, occupied by other tasks, private to other tasks, selected by the
+//! task from vacant elements (fresh capacity), selected from occupied ones
+//! (reuse), private to the task. While a task trains, its selection is the
+//! current iteration's hard mask. Codes are row-major over (out, in).
+//!
+//! Also the forward-transfer preview: how many elements of each layer the
+//! transfer bonus (METHOD.md 2.6) lifts for a given set of related tasks.
+
+use super::masked::MaskedLinear;
+use super::mlp::MaskedMlp;
+use super::state::{ElementState, TaskId};
+use serde::{Deserialize, Serialize};
+
+/// The state of one element from one task's point of view (its code is `as u8`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[repr(u8)]
+pub enum ElementView {
+    /// No finished task uses it, and the task does not select it.
+    Vacant = 0,
+    /// Used by other finished tasks, not by this one.
+    OccupiedByOthers = 1,
+    /// Reserved for another task.
+    PrivateToOthers = 2,
+    /// Selected by the task; no task finished before it used the element.
+    SelectedFromVacant = 3,
+    /// Selected by the task and used by a task finished before it.
+    SelectedFromOccupied = 4,
+    /// Reserved for this task.
+    PrivateToTask = 5,
+}
+
+impl ElementView {
+    /// Every view in code order (the legend's order).
+    pub const ALL: [ElementView; 6] = [
+        ElementView::Vacant,
+        ElementView::OccupiedByOthers,
+        ElementView::PrivateToOthers,
+        ElementView::SelectedFromVacant,
+        ElementView::SelectedFromOccupied,
+        ElementView::PrivateToTask,
+    ];
+
+    /// The view of code `code` (None for a code no view has).
+    pub fn from_code(code: u8) -> Option<ElementView> {
+        Self::ALL.get(code as usize).copied()
+    }
+
+    /// A short label for legends.
+    pub fn label(self) -> &'static str {
+        match self {
+            ElementView::Vacant => "vacant",
+            ElementView::OccupiedByOthers => "occupied (others)",
+            ElementView::PrivateToOthers => "private (others)",
+            ElementView::SelectedFromVacant => "selected from vacant",
+            ElementView::SelectedFromOccupied => "selected from occupied",
+            ElementView::PrivateToTask => "private (this task)",
+        }
+    }
+}
+
+/// One layer's elements seen from one task.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LayerView {
+    /// The network (`actor`, `critic`, `cenet`, ...).
+    pub network: String,
+    /// The layer (`actor.l0`, ...).
+    pub layer: String,
+    /// [out, in].
+    pub shape: [usize; 2],
+    /// One [`ElementView`] code per element, row-major (out, in).
+    pub codes: Vec<u8>,
+}
+
+/// How many elements of one layer the transfer bonus lifts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LayerLift {
+    pub layer: String,
+    /// Elements selected by at least one related task.
+    pub lifted: usize,
+    /// Elements of the layer.
+    pub total: usize,
+}
+
+fn layer_view(network: &str, l: &MaskedLinear, task: TaskId) -> LayerView {
+    let n = l.out_dim * l.in_dim;
+    let training = l.training.as_ref().filter(|t| t.task == task);
+    let live = training.and_then(|t| t.previous_selection.as_deref());
+    let stored = l.masks.get(&task);
+    let position = l.finish_order.iter().position(|t| *t == task);
+    let earlier: Vec<_> = match (training, position) {
+        // A repeat, or a finished task: the tasks that finished before it first did.
+        (_, Some(p)) => l.finish_order[..p].iter().filter_map(|t| l.masks.get(t)).collect(),
+        // A new task in training: every finished task came before it.
+        (Some(_), None) => l.finish_order.iter().filter_map(|t| l.masks.get(t)).collect(),
+        (None, None) => Vec::new(),
+    };
+    let codes = (0..n)
+        .map(|i| {
+            let selected = match live {
+                Some(sel) => sel[i],
+                None => stored.is_some_and(|m| m.get(i)),
+            };
+            let view = match (l.states[i], selected) {
+                (ElementState::Private(owner), _) if owner == task => ElementView::PrivateToTask,
+                (ElementState::Private(_), _) => ElementView::PrivateToOthers,
+                (_, true) if earlier.iter().any(|m| m.get(i)) => ElementView::SelectedFromOccupied,
+                (_, true) => ElementView::SelectedFromVacant,
+                (ElementState::Vacant, false) => ElementView::Vacant,
+                (ElementState::Occupied, false) => ElementView::OccupiedByOthers,
+            };
+            view as u8
+        })
+        .collect();
+    LayerView { network: network.to_string(), layer: l.name.clone(), shape: [l.out_dim, l.in_dim], codes }
+}
+
+/// Every layer of every network, seen from `task`.
+pub fn mask_views(networks: &[&MaskedMlp], task: TaskId) -> Vec<LayerView> {
+    networks.iter().flat_map(|net| net.layers().iter().map(|l| layer_view(net.name(), l, task))).collect()
+}
+
+/// Per layer of every network: the elements the transfer bonus lifts when a new task names `related`.
+pub fn transfer_lift(networks: &[&MaskedMlp], related: &[TaskId]) -> Vec<LayerLift> {
+    networks
+        .iter()
+        .flat_map(|net| net.layers().iter())
+        .map(|l| {
+            let masks: Vec<_> = related.iter().filter_map(|t| l.masks.get(t)).collect();
+            let n = l.out_dim * l.in_dim;
+            LayerLift {
+                layer: l.name.clone(),
+                lifted: (0..n).filter(|&i| masks.iter().any(|m| m.get(i))).count(),
+                total: n,
+            }
+        })
+        .collect()
+}
