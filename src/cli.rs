@@ -28,11 +28,13 @@ pub enum Command {
     Gait(crate::cmd::gait::GaitArgs),
     /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
     Run(crate::cmd::run::RunArgs),
+    /// The workbench (also what `quadcl` alone opens): step through a sequence, watch training, masks, the robot.
+    Tui(crate::cmd::tui::TuiArgs),
     /// Sim-to-real fine-tuning of one learned task on a shifted environment (its private parameters only).
     Finetune(crate::cmd::finetune::FinetuneArgs),
 }
 
-/// Runs the chosen subcommand. Without one, says what there is to run.
+/// Runs the chosen subcommand. Without one, opens the workbench (or, without a terminal, says what to run).
 pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Bench(args)) => crate::cmd::bench::run(args),
@@ -42,9 +44,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Gait(args)) => crate::cmd::gait::run(args),
         Some(Command::Run(args)) => crate::cmd::run::run(args),
         Some(Command::Finetune(args)) => crate::cmd::finetune::run(args),
-        None => {
-            crate::cmd::welcome::run();
-            Ok(())
-        }
+        Some(Command::Tui(args)) => crate::cmd::tui::run(args),
+        None => crate::cmd::tui::run(crate::cmd::tui::TuiArgs::default()),
     }
 }

@@ -15,6 +15,7 @@
 //! | [`cl`] | continual learning around the learner: the method's hooks and switches, sequences, the continual measures | `config`, `util`, `sim`, `nn`, `rl` |
 //! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl` |
 //! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine` |
+//! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine` |
 //!
 //! `engine` imports `sim` for what only a simulator-backed learner needs (the
 //! task perturbations it trains on, the shifted environments of sim-to-real
@@ -35,4 +36,5 @@ pub mod headless;
 pub mod nn;
 pub mod rl;
 pub mod sim;
+pub mod tui;
 pub mod util;

@@ -7,4 +7,5 @@ pub mod gait;
 pub mod masks;
 pub mod run;
 pub mod train;
+pub mod tui;
 pub mod welcome;

@@ -1,12 +1,13 @@
-//! What `quadcl` prints when run without a subcommand (`cargo run --release`).
-//! The terminal workbench (TUI) will open here once it exists; until then it
-//! says what there is to run, with commands that work from the repository root.
+//! What `quadcl` prints when run without a subcommand (`cargo run --release`)
+//! and there is no terminal to open the workbench on: what there is to run,
+//! with commands that work from the repository root.
 
 /// Prints what there is to run.
 pub fn run() {
     println!(
         "quadcl {}: continual reinforcement learning on a simulated quadruped.\n\n\
-         There is no terminal workbench (TUI) yet. Things to run now (cargo run --release -- ...):\n\
+         The workbench needs a terminal (stdin and stdout are not one here). Things to run (cargo run --release -- ...):\n\
+         \x20 tui [--run DIR] [--config FILE]                       the workbench, in a terminal (what `quadcl` alone opens)\n\
          \x20 run --config scenes/smoke.toml --out runs/smoke    a 3-task sequence in seconds: metrics.json, checkpoints\n\
          \x20 train --config scenes/train-base.toml --out runs/base [--resume]   the base walking policy (long)\n\
          \x20 eval --policy DIR --task none --episodes 32 --json     return, tracking errors, fall rate\n\

@@ -91,6 +91,8 @@ pub enum Command {
     AppendTask(TaskSpec),
     /// Write the results now (a runner's business; see `engine::Runner`).
     Save,
+    /// Pause after each task ends (true: step through the sequence) or run on (false).
+    PauseAfterEachTask(bool),
     /// Stop: the task in progress is abandoned (a resume retrains it from its start).
     Stop,
 }

@@ -60,6 +60,7 @@ pub struct Runner {
     written_tasks: usize,
     reference: Option<MetricsFile>,
     keep_last_checkpoint_only: bool,
+    base_policy: Option<PathBuf>,
     lines: Arc<Mutex<String>>,
 }
 
@@ -176,6 +177,7 @@ impl Runner {
             run_text,
             reference,
             keep_last_checkpoint_only: cfg.run.keep_last_checkpoint_only,
+            base_policy: cfg.run.base_policy.clone(),
             lines,
         })
     }
@@ -204,6 +206,11 @@ impl Runner {
     pub fn last_checkpoint(&self) -> Option<PathBuf> {
         let steps = &self.session.results().steps;
         steps.last().map(|s| self.dir.checkpoint(s.step, &s.name))
+    }
+
+    /// The run file's base policy (`[run] base_policy`), if any.
+    pub fn base_policy(&self) -> Option<PathBuf> {
+        self.base_policy.clone()
     }
 
     /// `metrics.json` as it stands.

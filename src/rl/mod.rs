@@ -14,6 +14,7 @@
 //! | `progress` | what every training loop shares in reporting: the bar, the iteration line, the step and time counters |
 //! | `evaluate` | deterministic evaluation, one episode per env: the `quadcl eval` figures |
 //! | `gait` | the contact pattern of a policy under one held command |
+//! | `robot_view` | watching a policy: one env stepped by its deterministic policy, the robot's pose per step |
 //! | `policy_dir` | save/load a trained policy directory (weights, normaliser statistics, manifest) |
 //! | `env` | the [`TrainEnv`] trait: what the learner needs from a batch of environments |
 //! | `toy_env` | a point-mass [`TrainEnv`] for fast tests of the loop |
@@ -30,6 +31,7 @@ mod normalizer;
 mod policy_dir;
 mod ppo;
 mod progress;
+mod robot_view;
 mod rollout;
 mod sim_env;
 #[cfg(test)]
@@ -49,6 +51,7 @@ pub use policy_dir::{
 };
 pub use ppo::PpoLearner;
 pub use progress::{iteration_line, iteration_summary, progress_bar, TrainingClock};
+pub use robot_view::{RobotFrame, RobotViewer};
 pub use sim_env::SimTrainEnv;
 pub use toy_env::ToyEnv;
 pub use trainer::{load_resume_point, train, train_from, TrainSummary, TrainerState};

@@ -171,6 +171,11 @@ impl LocomotionEnv {
         }
     }
 
+    /// Where the trunk, the leg joints and the feet are now, for drawing the robot (`sim::pose`).
+    pub fn pose(&self) -> super::pose::RobotPose {
+        super::pose::robot_pose(&self.robot, &self.state, &self.sim.joint_positions(), self.foot_contacts)
+    }
+
     /// This episode's physical parameters.
     pub fn physics_params(&self) -> PhysicsParams {
         self.params

@@ -8,12 +8,14 @@
 //! - [`reward`]: the paper's Table 1, one function per term.
 //! - `env`: `LocomotionEnv`, reset(seed) / step(action).
 //! - `episode`: the step result and the finished-episode summary.
+//! - `pose`: the robot's world-frame pose (trunk box, leg joints, feet) for drawing it.
 //! - `vec_env`: a batch of envs stepped in parallel with rayon.
 
 mod env;
 mod episode;
 pub mod obs;
 mod physics;
+mod pose;
 pub mod reward;
 mod robot;
 mod tasks;
@@ -24,6 +26,7 @@ pub use env::LocomotionEnv;
 pub use episode::{EpisodeSummary, Step};
 pub use obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_BASE_LIN_VEL, PRIV_OBS_DIM};
 pub use physics::RawState;
+pub use pose::{LegPose, RobotPose};
 pub use robot::{Leg, LegJoint, RobotModel, JOINTS_PER_LEG, NUM_LEGS};
 pub use tasks::{Perturbation, PerturbationKind};
 pub use vec_env::{VecEnv, VecStep};

@@ -331,6 +331,11 @@ impl RobotSim {
         s
     }
 
+    /// World position of each leg joint (its child link's origin), in leg-joint order (`sim::pose`).
+    pub fn joint_positions(&self) -> [[f32; 3]; 12] {
+        self.joint_links.map(|id| self.mb().link(id).expect("leg link exists").local_to_world().translation.into())
+    }
+
     /// Adds `dv` (world x, y) to the trunk's linear velocity (a push).
     pub fn push(&mut self, dv: [f32; 2]) {
         let mut vel = self.mb_mut().generalized_velocity_mut();

@@ -85,6 +85,11 @@ impl Session {
         }
     }
 
+    /// Pause when each task has ended (step through the sequence), or run on.
+    pub fn set_pause_after_each_task(&mut self, on: bool) {
+        self.pause_after_task = on;
+    }
+
     /// Whether the session was stopped (or failed).
     pub fn is_stopped(&self) -> bool {
         self.stopped
@@ -163,10 +168,26 @@ impl Session {
     fn apply(&mut self, c: Command) {
         let label = format!("{c:?}");
         let result = match c {
-            Command::Pause => Ok(self.pause()),
-            Command::Resume => Ok(self.resume()),
-            Command::Stop => Ok(self.stop()),
-            Command::Save => Ok(self.save_requested = true),
+            Command::Pause => {
+                self.pause();
+                Ok(())
+            }
+            Command::Resume => {
+                self.resume();
+                Ok(())
+            }
+            Command::Stop => {
+                self.stop();
+                Ok(())
+            }
+            Command::PauseAfterEachTask(on) => {
+                self.set_pause_after_each_task(on);
+                Ok(())
+            }
+            Command::Save => {
+                self.save_requested = true;
+                Ok(())
+            }
             Command::SetNextSwitches(o) => self.set_next_switches(o),
             Command::SetNextTransfer { related, init } => self.set_next_transfer(related, init),
             Command::Evaluate(name) => self.evaluate_now(&name),

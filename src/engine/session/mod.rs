@@ -71,6 +71,8 @@ pub struct Session {
     paused: bool,
     /// Set by [`Command::Stop`]: nothing more is trained.
     stopped: bool,
+    /// [`Command::PauseAfterEachTask`]: pause when a task has ended.
+    pause_after_task: bool,
     /// Set by [`Command::Save`] until a runner takes it.
     save_requested: bool,
     /// The task whose element views are reported ([`Command::WatchMasks`]).
@@ -118,6 +120,7 @@ impl Session {
             queued_transfer: None,
             paused: false,
             stopped: false,
+            pause_after_task: false,
             save_requested: false,
             watched: None,
             reference: Default::default(),
@@ -146,6 +149,11 @@ impl Session {
     /// The learner (for saving checkpoints, mask statistics, viewers).
     pub fn learner(&self) -> &dyn Learner {
         self.learner.as_ref()
+    }
+
+    /// The run's switches (every task that does not change them uses these).
+    pub fn switches(&self) -> &Switches {
+        &self.switches
     }
 
     /// The sequence being trained.
@@ -358,6 +366,9 @@ impl Session {
         }
         if self.is_done() {
             self.emit(Event::SequenceFinished { steps: self.completed_steps() });
+        }
+        if self.pause_after_task {
+            self.pause();
         }
         Ok(())
     }

@@ -1,0 +1,558 @@
+//! The workbench's state and its one way to change: [`App::update`] with an
+//! [`Action`] (a key, a click, a resize, or a message from the worker).
+//! Drawing only borrows this state (`ui` and `panels/`). What the engine
+//! must do is queued in [`App::outbox`] for the event loop to send; the app
+//! computes no measure itself: results, evaluation matrix, summary, mask
+//! statistics and element views all come from engine events.
+
+use super::next_task::NextTask;
+use super::timeline::{rows, Row, RowKind};
+use super::worker::{Opened, WorkerMsg};
+use crate::cl::{Switches, TaskSpec};
+use crate::engine::{Command, Evaluation, Event, StepRecord, Summary, TaskCurve};
+use crate::nn::{LayerView, MaskReport};
+use crate::rl::RobotFrame;
+use std::path::PathBuf;
+
+/// The screens (the timeline and training control are on each).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Screen {
+    Overview,
+    Evaluation,
+    NextTask,
+    Robot,
+}
+
+/// A panel that can have the focus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Panel {
+    Timeline,
+    Training,
+    Curves,
+    Masks,
+    Matrix,
+    Controls,
+    Robot,
+}
+
+/// The training curve shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CurveMetric {
+    Performance,
+    Return,
+    LinVelErr,
+    AngVelErr,
+    FallRate,
+}
+
+impl CurveMetric {
+    pub fn label(self) -> &'static str {
+        match self {
+            CurveMetric::Performance => "performance",
+            CurveMetric::Return => "return",
+            CurveMetric::LinVelErr => "lin_vel_err m/s",
+            CurveMetric::AngVelErr => "ang_vel_err rad/s",
+            CurveMetric::FallRate => "fall rate",
+        }
+    }
+
+    /// The values of this metric in `curve`.
+    pub fn of(self, curve: &TaskCurve) -> &[f64] {
+        match self {
+            CurveMetric::Performance => &curve.performance,
+            CurveMetric::Return => &curve.episodic_return,
+            CurveMetric::LinVelErr => &curve.lin_vel_err,
+            CurveMetric::AngVelErr => &curve.ang_vel_err,
+            CurveMetric::FallRate => &curve.fall_rate,
+        }
+    }
+
+    fn next(self) -> Self {
+        use CurveMetric::*;
+        match self {
+            Performance => Return,
+            Return => LinVelErr,
+            LinVelErr => AngVelErr,
+            AngVelErr => FallRate,
+            FallRate => Performance,
+        }
+    }
+}
+
+/// Everything a key, a click or the worker can do.
+#[derive(Debug, Clone)]
+pub enum Action {
+    Quit,
+    /// The answer to "quit while training?".
+    ConfirmQuit(bool),
+    ToggleHelp,
+    FocusNext,
+    FocusPrev,
+    /// A mouse click at (column, row).
+    Click(u16, u16),
+    Show(Screen),
+    CursorUp,
+    CursorDown,
+    /// Start the next step, or pause / resume the one in progress.
+    StartPause,
+    /// Step through the sequence (pause after each task) or run through it.
+    ToggleRunThrough,
+    EvaluateSelected,
+    Save,
+    /// Open the selected task in the 3D viewer (Rerun).
+    OpenViewer,
+    CurveMetricNext,
+    /// Smoothing weight up / down; toggle off and on.
+    SmoothingUp,
+    SmoothingDown,
+    SmoothingToggle,
+    WholeSequence,
+    NetworkNext,
+    ControlUp,
+    ControlDown,
+    /// Change the control row under the cursor (-1 / +1; 0 toggles).
+    ControlChange(i8),
+    BeginAddTask,
+    Input(char),
+    InputBackspace,
+    /// Clear the line being typed.
+    InputClear,
+    InputSubmit,
+    InputCancel,
+    Resize(u16, u16),
+    Worker(WorkerMsg),
+}
+
+/// What the event loop must do for the app.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outgoing {
+    Engine(Command),
+    /// Run the robot view of (policy, task); None stops it.
+    Robot(Option<(PathBuf, String)>),
+}
+
+/// The task in training, as its events tell it.
+#[derive(Debug, Clone)]
+pub struct Live {
+    pub record: StepRecord,
+    pub iteration: usize,
+    pub curve: TaskCurve,
+    /// Seconds (of the app's clock) at which recent iterations arrived.
+    pub arrivals: Vec<f64>,
+    /// Env steps per second the learner reported last.
+    pub sps: Option<f64>,
+}
+
+impl Live {
+    /// Iterations per second over the recent arrivals.
+    pub fn rate(&self) -> Option<f64> {
+        let (first, last) = (self.arrivals.first()?, self.arrivals.last()?);
+        (self.arrivals.len() > 1 && last > first).then(|| (self.arrivals.len() - 1) as f64 / (last - first))
+    }
+}
+
+/// The robot panel's state.
+#[derive(Debug, Clone, Default)]
+pub struct RobotView {
+    pub task: Option<String>,
+    pub frame: Option<RobotFrame>,
+    pub error: Option<String>,
+}
+
+/// Where the app's seconds come from: the wall clock, or a fixed tick per reading (tests).
+#[derive(Debug, Clone)]
+pub enum Clock {
+    Real(std::time::Instant),
+    Ticks(u64),
+}
+
+/// The workbench.
+pub struct App {
+    pub opened: Option<Opened>,
+    /// What the worker was asked to open (shown until it answers).
+    pub opening: PathBuf,
+    pub live: Option<Live>,
+    pub paused: bool,
+    pub stopped: bool,
+    pub failure: Option<String>,
+    pub summary: Option<Summary>,
+    pub report: Option<MaskReport>,
+    /// Element views of one task (and the live iteration they show, while it trains).
+    pub views: Option<(usize, Option<usize>, Vec<LayerView>)>,
+    pub last_eval: Option<Evaluation>,
+    pub cursor: usize,
+    pub screen: Screen,
+    pub focus: Panel,
+    pub help: bool,
+    pub confirm_quit: bool,
+    pub quit: bool,
+    /// EMA weight of the smoothed curve; `smoothing_on` false shows the raw line only.
+    pub smoothing: f64,
+    pub smoothing_on: bool,
+    pub metric: CurveMetric,
+    pub whole_sequence: bool,
+    /// Train the rest of the sequence without pausing after each task.
+    pub run_through: bool,
+    pub network: usize,
+    pub next: NextTask,
+    pub robot: RobotView,
+    pub messages: Vec<String>,
+    pub size: (u16, u16),
+    pub outbox: Vec<Outgoing>,
+    clock: Clock,
+}
+
+impl App {
+    /// A workbench waiting for the run in `opening`, on a terminal of `size`.
+    pub fn new(opening: PathBuf, size: (u16, u16), clock: Clock) -> Self {
+        Self {
+            opened: None,
+            opening,
+            live: None,
+            paused: true,
+            stopped: false,
+            failure: None,
+            summary: None,
+            report: None,
+            views: None,
+            last_eval: None,
+            cursor: 0,
+            screen: Screen::Overview,
+            focus: Panel::Timeline,
+            help: false,
+            confirm_quit: false,
+            quit: false,
+            smoothing: 0.9,
+            smoothing_on: true,
+            metric: CurveMetric::Performance,
+            whole_sequence: false,
+            run_through: false,
+            network: 0,
+            next: NextTask::default(),
+            robot: RobotView::default(),
+            messages: Vec::new(),
+            size,
+            outbox: Vec::new(),
+            clock,
+        }
+    }
+
+    fn now(&mut self) -> f64 {
+        match &mut self.clock {
+            Clock::Real(start) => start.elapsed().as_secs_f64(),
+            Clock::Ticks(n) => {
+                *n += 1;
+                *n as f64
+            }
+        }
+    }
+
+    /// The timeline's rows (base tasks, then every step of the sequence).
+    pub fn rows(&self) -> Vec<Row> {
+        rows(self)
+    }
+
+    /// The selected row.
+    pub fn selected(&self) -> Option<Row> {
+        self.rows().into_iter().nth(self.cursor)
+    }
+
+    /// The run's switches, if open.
+    pub fn switches(&self) -> Option<&Switches> {
+        self.opened.as_ref().map(|o| &o.switches)
+    }
+
+    /// Whether a task is training right now (not paused).
+    pub fn is_training(&self) -> bool {
+        self.live.is_some() && !self.paused && !self.stopped
+    }
+
+    fn say(&mut self, message: impl Into<String>) {
+        self.messages.push(message.into());
+        let n = self.messages.len();
+        if n > 50 {
+            self.messages.drain(..n - 50);
+        }
+    }
+
+    fn send(&mut self, c: Command) {
+        self.outbox.push(Outgoing::Engine(c));
+    }
+
+    /// Applies one action.
+    pub fn update(&mut self, action: Action) {
+        match action {
+            Action::Quit if self.is_training() => self.confirm_quit = true,
+            Action::Quit | Action::ConfirmQuit(true) => {
+                self.confirm_quit = false;
+                self.quit = true;
+                self.send(Command::Stop);
+            }
+            Action::ConfirmQuit(false) => self.confirm_quit = false,
+            Action::ToggleHelp => self.help = !self.help,
+            Action::FocusNext | Action::FocusPrev => {
+                let panels = super::ui::focus_order(self.screen);
+                let i = panels.iter().position(|p| *p == self.focus).unwrap_or(0);
+                let step = if matches!(action, Action::FocusNext) { 1 } else { panels.len() - 1 };
+                self.focus = panels[(i + step) % panels.len()];
+            }
+            Action::Click(col, row) => self.click(col, row),
+            Action::Show(screen) => self.show(screen),
+            Action::CursorUp => self.move_cursor(-1),
+            Action::CursorDown => self.move_cursor(1),
+            Action::StartPause => self.start_pause(),
+            Action::ToggleRunThrough => {
+                self.run_through = !self.run_through;
+                self.send(Command::PauseAfterEachTask(!self.run_through));
+            }
+            Action::EvaluateSelected => match self.selected() {
+                Some(r) if r.learned() => self.send(Command::Evaluate(r.task)),
+                Some(r) => self.say(format!("{} is not learned yet: nothing to evaluate", r.task)),
+                None => {}
+            },
+            Action::Save => {
+                self.send(Command::Save);
+                self.say("saving metrics.json and the log (a task in progress is saved when it ends)");
+            }
+            Action::OpenViewer => {
+                self.say("the 3D view (Rerun) is not there yet: it comes with `quadcl view` (issue 12)")
+            }
+            Action::CurveMetricNext => self.metric = self.metric.next(),
+            Action::SmoothingUp => self.smoothing = (self.smoothing + 0.05).min(0.99),
+            Action::SmoothingDown => self.smoothing = (self.smoothing - 0.05).max(0.0),
+            Action::SmoothingToggle => self.smoothing_on = !self.smoothing_on,
+            Action::WholeSequence => self.whole_sequence = !self.whole_sequence,
+            Action::NetworkNext => {
+                let n = self.report.as_ref().map_or(1, |r| r.networks.len().max(1));
+                self.network = (self.network + 1) % n;
+            }
+            Action::ControlUp => self.next.move_cursor(-1, self.opened.as_ref()),
+            Action::ControlDown => self.next.move_cursor(1, self.opened.as_ref()),
+            Action::ControlChange(dir) => {
+                let commands = self.next.change(dir, self.opened.as_ref(), self.live.is_some());
+                commands.into_iter().for_each(|c| self.send(c));
+            }
+            Action::BeginAddTask => self.next.input = Some(String::new()),
+            Action::Input(c) => self.next.type_char(c),
+            Action::InputBackspace => self.next.backspace(),
+            Action::InputClear => {
+                if let Some(s) = &mut self.next.input {
+                    s.clear();
+                }
+            }
+            Action::InputCancel => self.next.cancel_input(),
+            Action::InputSubmit => {
+                if let Some(spec) = self.next.submit() {
+                    self.send(Command::AppendTask(spec));
+                }
+            }
+            Action::Resize(w, h) => self.size = (w, h),
+            Action::Worker(msg) => self.on_worker(msg),
+        }
+    }
+
+    fn show(&mut self, screen: Screen) {
+        self.screen = screen;
+        if !super::ui::focus_order(screen).contains(&self.focus) {
+            self.focus = Panel::Timeline;
+        }
+        self.follow_selection();
+    }
+
+    fn click(&mut self, col: u16, row: u16) {
+        let area = ratatui::layout::Rect::new(0, 0, self.size.0, self.size.1);
+        let hit = super::ui::panels(area, self.screen)
+            .into_iter()
+            .find(|(_, r)| col >= r.x && col < r.x + r.width && row >= r.y && row < r.y + r.height);
+        if let Some((panel, rect)) = hit {
+            self.focus = panel;
+            if panel == Panel::Timeline && row > rect.y + 1 {
+                let index = (row - rect.y - 2) as usize + super::timeline::scroll(self, rect.height);
+                if index < self.rows().len() {
+                    self.cursor = index;
+                    self.follow_selection();
+                }
+            }
+        }
+    }
+
+    fn move_cursor(&mut self, by: isize) {
+        let n = self.rows().len();
+        if n == 0 {
+            return;
+        }
+        self.cursor = (self.cursor as isize + by).clamp(0, n as isize - 1) as usize;
+        self.follow_selection();
+    }
+
+    /// Asks for what the selected row's panels show: its element views, its robot.
+    fn follow_selection(&mut self) {
+        let Some(row) = self.selected() else { return };
+        let known = self.opened.as_ref().is_some_and(|o| o.results.tasks.contains(&row.task));
+        if known && self.views.as_ref().map(|v| v.0) != self.task_id(&row.task) {
+            self.send(Command::WatchMasks(row.task.clone()));
+        }
+        let want = (self.screen == Screen::Robot && row.learned())
+            .then(|| self.opened.as_ref().and_then(|o| o.last_checkpoint.clone()))
+            .flatten()
+            .map(|p| (p, row.task.clone()));
+        let running = self.robot.task.clone();
+        if want.as_ref().map(|w| &w.1) != running.as_ref() {
+            self.robot = RobotView { task: want.as_ref().map(|w| w.1.clone()), ..Default::default() };
+            self.outbox.push(Outgoing::Robot(want));
+        }
+    }
+
+    fn task_id(&self, name: &str) -> Option<usize> {
+        self.opened.as_ref()?.results.tasks.iter().position(|t| t == name)
+    }
+
+    fn start_pause(&mut self) {
+        let Some(o) = &self.opened else { return };
+        if self.stopped {
+            self.say("the session has stopped; reopen the run folder to go on");
+        } else if self.paused {
+            if self.live.is_none() && o.results.steps.len() >= o.sequence.tasks.len() {
+                self.say("every step is learned: add a task on the Next task screen (3, then a)");
+            } else {
+                self.send(Command::Resume);
+            }
+        } else {
+            self.send(Command::Pause);
+        }
+    }
+
+    fn on_worker(&mut self, msg: WorkerMsg) {
+        match msg {
+            WorkerMsg::Opened(o) => {
+                self.report = Some(o.report.clone());
+                self.summary = Some(o.summary.clone());
+                let first_pending = o.base_tasks.len() + o.results.steps.len();
+                self.next.reset(&o, o.results.steps.len());
+                self.opened = Some(*o);
+                // The last learned step: its curves and masks are the first thing to look at.
+                self.cursor = first_pending.saturating_sub(1);
+                self.follow_selection();
+            }
+            WorkerMsg::Event(e) => self.on_event(e),
+            WorkerMsg::Failed(e) => {
+                self.say(format!("failed: {e}"));
+                self.failure = Some(e);
+                self.stopped = true;
+            }
+            WorkerMsg::Exited => self.stopped = true,
+            WorkerMsg::Robot { task, frame } if self.robot.task.as_ref() == Some(&task) => {
+                self.robot.frame = Some(*frame);
+            }
+            WorkerMsg::Robot { .. } => {}
+            WorkerMsg::RobotFailed { task, error } => {
+                self.robot.error = Some(error.clone());
+                self.say(format!("robot view of {task}: {error}"));
+            }
+        }
+    }
+
+    fn on_event(&mut self, e: Event) {
+        match e {
+            Event::TaskStarted { step, task, name, iterations, switches, related, repeat } => {
+                let record = StepRecord { step, task, name: name.clone(), iterations, switches, related, repeat };
+                let curve = TaskCurve { step, task, name, ..Default::default() };
+                self.live = Some(Live { record, iteration: 0, curve, arrivals: Vec::new(), sps: None });
+                self.next.task_started();
+                if let Some(o) = &self.opened {
+                    self.next.reset(o, step + 1);
+                    // Follow the step that trains: its live curve and masks.
+                    self.cursor = o.base_tasks.len() + step;
+                }
+                self.follow_selection();
+            }
+            Event::Iteration { iteration, metrics, .. } => {
+                let now = self.now();
+                if let Some(l) = &mut self.live {
+                    l.iteration = iteration;
+                    l.curve.push(&metrics);
+                    l.sps = metrics.get(crate::rl::metric_names::SPS).copied().or(l.sps);
+                    l.arrivals.push(now);
+                    if l.arrivals.len() > 10 {
+                        l.arrivals.remove(0);
+                    }
+                }
+            }
+            Event::MaskStats { report, .. } => self.report = Some(report),
+            Event::Measures { after_step, eval_matrix, summary } => {
+                let live = self.live.take();
+                if let Some(o) = &mut self.opened {
+                    if let Some(l) = live.filter(|l| l.record.step == after_step) {
+                        o.results.steps.push(l.record);
+                        o.results.curves.push(l.curve);
+                    }
+                    o.results.eval_matrix = eval_matrix;
+                    if let Some(s) = o.results.steps.last() {
+                        o.last_checkpoint = Some(crate::engine::RunDir::new(&o.run_dir).checkpoint(s.step, &s.name));
+                    }
+                    let next = o.results.steps.len();
+                    self.next.reset(o, next);
+                }
+                self.summary = Some(summary);
+            }
+            Event::Evaluated { evaluation, .. } => {
+                if let Some(o) = &mut self.opened {
+                    if o.results.evaluations.len() < o.results.steps.len() + 1 {
+                        o.results.evaluations.push(Vec::new());
+                    }
+                    if let Some(row) = o.results.evaluations.last_mut() {
+                        row.push(evaluation);
+                    }
+                }
+            }
+            Event::MaskViews { task, iteration, layers } => self.views = Some((task, iteration, layers)),
+            Event::EvaluatedNow { evaluation } => {
+                self.say(format!(
+                    "{}: performance {:.3}, return {:.2}, lin_vel_err {:.3}, fall rate {:.2}",
+                    evaluation.report.task,
+                    evaluation.performance,
+                    evaluation.report.mean_return,
+                    evaluation.report.lin_vel_err,
+                    evaluation.report.fall_rate
+                ));
+                self.last_eval = Some(evaluation);
+            }
+            Event::TransferPreview { related, layers } => self.next.preview = Some((related, layers)),
+            Event::TaskAppended { spec, .. } => self.append(spec),
+            Event::SwitchesQueued { overrides } => self.next.queued = self.next.queued.merged(&overrides),
+            Event::TransferQueued { related, init } => self.next.transfer = Some((related, init)),
+            Event::CommandRejected { error, .. } => {
+                self.next.input_error = self.next.input.is_some().then(|| error.clone());
+                self.say(format!("rejected: {error}"));
+            }
+            Event::Failed { error } => {
+                self.say(format!("training failed: {error}"));
+                self.failure = Some(error);
+            }
+            Event::Paused { .. } => self.paused = true,
+            Event::Resumed { .. } => self.paused = false,
+            Event::Stopped { .. } => self.stopped = true,
+            Event::SequenceFinished { steps } => self.say(format!("the sequence is done ({steps} steps)")),
+            Event::TaskEnded { .. } => {}
+        }
+    }
+
+    fn append(&mut self, spec: TaskSpec) {
+        self.next.input = None;
+        self.next.input_error = None;
+        self.say(format!("added {} at the end of the sequence", spec.name));
+        if let Some(o) = &mut self.opened {
+            if !o.results.tasks.contains(&spec.name) {
+                o.results.tasks.push(spec.name.clone());
+                o.results.eval_matrix.tasks.push(spec.name.clone());
+                o.results.eval_matrix.rows.iter_mut().for_each(|r| r.push(None));
+            }
+            o.sequence.tasks.push(spec);
+        }
+    }
+
+    /// The kind of the selected row (for panels that differ by kind).
+    pub fn selected_kind(&self) -> Option<RowKind> {
+        self.selected().map(|r| r.kind)
+    }
+}

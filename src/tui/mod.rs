@@ -1,0 +1,133 @@
+//! The workbench: a terminal app over the engine. `app` holds the state and
+//! `update(Action)`; `input` turns keys into actions; `ui` and `panels/` draw;
+//! `worker` runs the session (and the robot view) on their own threads.
+//! [`run_app`] takes its backend and its event source, so tests drive the real
+//! loop on ratatui's `TestBackend` with scripted events; [`run`] opens the
+//! terminal (raw mode, alternate screen, mouse capture) and restores it on
+//! every exit path, a panic included.
+
+pub mod app;
+pub mod input;
+pub mod next_task;
+pub mod panels;
+pub mod timeline;
+pub mod ui;
+pub mod worker;
+
+pub use app::{Action, App, Clock, Outgoing, Panel, Screen};
+pub use worker::{OpenSpec, Opened, Worker, WorkerMsg};
+
+use ratatui::backend::Backend;
+use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture, Event};
+use ratatui::crossterm::execute;
+use ratatui::crossterm::terminal::{disable_raw_mode, enable_raw_mode, EnterAlternateScreen, LeaveAlternateScreen};
+use ratatui::Terminal;
+use std::time::Duration;
+
+/// About 30 frames per second: the longest wait for input between frames.
+pub const FRAME: Duration = Duration::from_millis(33);
+
+/// Where terminal events come from (the terminal, or a script in tests).
+pub trait EventSource {
+    /// The next event, waiting at most `timeout`; None when none came.
+    fn next(&mut self, timeout: Duration) -> anyhow::Result<Option<Event>>;
+}
+
+/// The real terminal's events.
+pub struct TerminalEvents;
+
+impl EventSource for TerminalEvents {
+    fn next(&mut self, timeout: Duration) -> anyhow::Result<Option<Event>> {
+        Ok(if event::poll(timeout)? { Some(event::read()?) } else { None })
+    }
+}
+
+/// Sends what the app queued to the worker.
+pub fn dispatch(app: &mut App, worker: &mut Worker) {
+    for out in std::mem::take(&mut app.outbox) {
+        match out {
+            Outgoing::Engine(c) => worker.send(c),
+            Outgoing::Robot(Some((policy, task))) => worker.start_robot(policy, task),
+            Outgoing::Robot(None) => worker.stop_robot(),
+        }
+    }
+}
+
+/// One pass of the loop: the worker's messages in, the queued commands out, one frame drawn.
+pub fn tick<B: Backend>(terminal: &mut Terminal<B>, app: &mut App, worker: &mut Worker) -> anyhow::Result<()>
+where
+    B::Error: Send + Sync + 'static,
+{
+    while let Ok(m) = worker.messages.try_recv() {
+        app.update(Action::Worker(m));
+    }
+    dispatch(app, worker);
+    terminal.draw(|f| ui::draw(f, app))?;
+    Ok(())
+}
+
+/// The event loop until the user quits: draws at most every [`FRAME`], applies
+/// every pending event, and on quit stops the session and waits for it (its
+/// results are written by then).
+pub fn run_app<B: Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+    worker: &mut Worker,
+    events: &mut dyn EventSource,
+) -> anyhow::Result<()>
+where
+    B::Error: Send + Sync + 'static,
+{
+    loop {
+        tick(terminal, app, worker)?;
+        if app.quit {
+            break;
+        }
+        let mut wait = FRAME;
+        while let Some(e) = events.next(wait)? {
+            if let Some(a) = input::event_action(app, &e) {
+                app.update(a);
+            }
+            dispatch(app, worker);
+            if app.quit {
+                break;
+            }
+            wait = Duration::ZERO;
+        }
+    }
+    app.messages.push("stopping: writing the results ...".into());
+    terminal.draw(|f| ui::draw(f, app))?;
+    worker.shutdown();
+    Ok(())
+}
+
+/// Restores the terminal when dropped (every exit path of [`run`]).
+struct TerminalGuard;
+
+fn restore_terminal() {
+    let _ = disable_raw_mode();
+    let _ = execute!(std::io::stdout(), LeaveAlternateScreen, DisableMouseCapture);
+}
+
+impl Drop for TerminalGuard {
+    fn drop(&mut self) {
+        restore_terminal();
+    }
+}
+
+/// Opens the workbench on the terminal for the run `spec` names.
+pub fn run(spec: OpenSpec) -> anyhow::Result<()> {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        restore_terminal();
+        previous(info);
+    }));
+    enable_raw_mode()?;
+    let _guard = TerminalGuard;
+    execute!(std::io::stdout(), EnterAlternateScreen, EnableMouseCapture)?;
+    let mut terminal = Terminal::new(ratatui::backend::CrosstermBackend::new(std::io::stdout()))?;
+    let size = terminal.size()?;
+    let mut app = App::new(spec.run_dir.clone(), (size.width, size.height), Clock::Real(std::time::Instant::now()));
+    let mut worker = Worker::spawn(spec);
+    run_app(&mut terminal, &mut app, &mut worker, &mut TerminalEvents)
+}

@@ -1,0 +1,106 @@
+//! The next task's controls: each ablation switch pending (for the next step
+//! to start) beside the one in force (the step training now, or the last);
+//! the forward-transfer composer (mode, related tasks among the learned ones,
+//! the engine's preview of the elements per layer the bonus lifts); a task
+//! string typed to add a step, with its parse error inline.
+
+use crate::cl::Switches;
+use crate::tui::app::App;
+use crate::tui::next_task::SWITCH_ROWS;
+use crate::tui::ui::block;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Paragraph, Wrap};
+use ratatui::Frame;
+
+fn switch_values(s: &Switches) -> [String; 5] {
+    let on = |b: bool| if b { "on" } else { "off" }.to_string();
+    [on(s.reinit), on(s.entropy), s.lambda.to_string(), format!("{:.2}", s.capacity), format!("{:.2}", s.private_share)]
+}
+
+pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
+    let next = &app.next;
+    let Some(run) = app.switches() else {
+        f.render_widget(Paragraph::new("opening ...").block(block("Next task", focused)), area);
+        return;
+    };
+    let in_force = app
+        .live
+        .as_ref()
+        .map(|l| l.record.switches.clone())
+        .or_else(|| app.opened.as_ref().and_then(|o| o.results.steps.last().map(|s| s.switches.clone())))
+        .unwrap_or_else(|| run.clone());
+    let pending = next.pending(run);
+    let target = next.step.as_ref().map_or("no pending step: add a task (a)".to_string(), |(step, spec)| {
+        let default = app.opened.as_ref().map_or(0, |o| o.sequence.iterations);
+        format!("step {step} {} ({} iterations)", spec.name, spec.iterations.unwrap_or(default))
+    });
+    let mut lines = vec![
+        Line::raw(format!("for {target}")),
+        Line::styled(
+            format!("  {:<18} {:>10} {:>12}", "switch", "pending", "in force"),
+            Style::new().fg(Color::Gray).add_modifier(Modifier::UNDERLINED),
+        ),
+    ];
+    let cursor_style = |row: usize| {
+        if focused && next.cursor == row {
+            Style::new().add_modifier(Modifier::REVERSED)
+        } else {
+            Style::new()
+        }
+    };
+    let (p, now) = (switch_values(&pending), switch_values(&in_force));
+    for (i, name) in SWITCH_ROWS.iter().enumerate() {
+        let changed = p[i] != now[i];
+        let value = Style::new().fg(if changed { Color::Yellow } else { Color::White });
+        lines.push(Line::from(vec![
+            Span::styled(format!("  {name:<18} "), cursor_style(i)),
+            Span::styled(format!("{:>10}", p[i]), value.patch(cursor_style(i))),
+            Span::raw(format!(" {:>12}", now[i])),
+        ]));
+    }
+    let (related, init) = next.related();
+    let mode_row = SWITCH_ROWS.len();
+    lines.push(Line::raw(""));
+    lines.push(Line::styled(
+        format!("  {:<18} {:>10}", "transfer mode", format!("{init:?}").to_lowercase()),
+        cursor_style(mode_row),
+    ));
+    lines.push(Line::styled("  related tasks (enter toggles):", Style::new().fg(Color::Gray)));
+    for (k, t) in next.learned.iter().enumerate() {
+        let mark = if related.contains(t) { "[x]" } else { "[ ]" };
+        lines.push(Line::styled(format!("    {mark} {t}"), cursor_style(mode_row + 1 + k)));
+    }
+    lines.push(Line::styled("  + add a task at the end (a)", cursor_style(next.len() - 1)));
+    if let Some(input) = &next.input {
+        lines.push(Line::from(vec![
+            Span::raw("  task: "),
+            Span::styled(format!("{input}▏"), Style::new().fg(Color::Cyan)),
+        ]));
+        lines.push(Line::styled("  enter adds it, esc cancels; e.g. invert:RR+noise:FR", Style::new().fg(Color::Gray)));
+    }
+    if let Some(e) = &next.input_error {
+        lines.push(Line::styled(format!("  {e}"), Style::new().fg(Color::Red)));
+    }
+    match &next.preview {
+        Some((names, layers)) if *names == related => {
+            lines.push(Line::raw(""));
+            lines.push(Line::styled("  the transfer bonus lifts, per layer:", Style::new().fg(Color::Gray)));
+            let width = area.width.saturating_sub(4) as usize;
+            let mut line = String::from("  ");
+            for l in layers {
+                let part =
+                    format!("{} {} ({:.0}%)   ", l.layer, l.lifted, 100.0 * l.lifted as f64 / l.total.max(1) as f64);
+                if line.len() + part.len() > width {
+                    lines.push(Line::raw(std::mem::replace(&mut line, String::from("  "))));
+                }
+                line.push_str(&part);
+            }
+            lines.push(Line::raw(line));
+        }
+        _ if init == crate::cl::TransferInit::Scratch => lines.push(Line::raw("  scratch: no bonus")),
+        _ => lines.push(Line::styled("  toggle a related task to preview its bonus", Style::new().fg(Color::Gray))),
+    }
+    f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }).block(block("Next task", focused)), area);
+}

@@ -1,0 +1,33 @@
+//! The help overlay: every key of the workbench.
+
+use crate::tui::ui::{block, centered};
+use ratatui::layout::Rect;
+use ratatui::widgets::{Clear, Paragraph};
+use ratatui::Frame;
+
+/// Every key, one line each.
+pub const KEYS: &[(&str, &str)] = &[
+    ("?", "this help (any key closes it)"),
+    ("q", "quit (asks first while a task trains)"),
+    ("Tab / Shift-Tab", "next / previous panel (a mouse click focuses one too)"),
+    ("1 2 3 4", "screens: Overview, Evaluation, Next task, Robot"),
+    ("↑ ↓ / k j", "select a step (a row of the Next task panel when it has the focus)"),
+    ("space", "start the next step / pause / resume training"),
+    ("r", "run through the rest of the sequence / stop after each step (the default)"),
+    ("e", "evaluate the selected task now (between tasks)"),
+    ("S", "save metrics.json and the log now"),
+    ("m", "curves: next metric (performance, return, tracking errors, fall rate)"),
+    ("s  + -", "curves: smoothing on/off, stronger / weaker (debiased EMA)"),
+    ("w", "curves: the selected step / the whole sequence"),
+    ("n", "masks: next network (actor, critic, CENet, ...)"),
+    ("← → enter", "next task: change the row (switch, mode, related task)"),
+    ("a", "next task: type a task to add at the end (e.g. invert:RR+noise:FR)"),
+    ("v", "open the selected task in the 3D viewer (Rerun)"),
+];
+
+pub fn draw(f: &mut Frame, area: Rect) {
+    let text: Vec<String> = KEYS.iter().map(|(k, what)| format!(" {k:<16} {what}")).collect();
+    let rect = centered(area, 92, KEYS.len() as u16 + 2);
+    f.render_widget(Clear, rect);
+    f.render_widget(Paragraph::new(text.join("\n")).block(block("Keys", true)), rect);
+}

@@ -1,0 +1,220 @@
+//! The selected task's masks, per layer of one network (n cycles actor,
+//! critic, CENet, ...): a density heatmap of element states in half-block
+//! cells (two pixels per cell; each pixel a block of elements, coloured by
+//! its most common state, dimmer the less of the block that state holds),
+//! per-layer fractions as bars, a legend, and the task's overlap with every
+//! other task. The element views and statistics are the engine's.
+
+use crate::nn::{ElementView, LayerMasks, LayerView};
+use crate::tui::app::App;
+use crate::tui::ui::block;
+use ratatui::buffer::Buffer;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Paragraph, Widget};
+use ratatui::Frame;
+
+/// The colour of each element view (the same in the legend).
+pub fn view_color(v: ElementView) -> (u8, u8, u8) {
+    match v {
+        ElementView::Vacant => (48, 48, 48),
+        ElementView::OccupiedByOthers => (70, 110, 200),
+        ElementView::PrivateToOthers => (150, 80, 200),
+        ElementView::SelectedFromVacant => (60, 210, 90),
+        ElementView::SelectedFromOccupied => (235, 195, 50),
+        ElementView::PrivateToTask => (235, 80, 60),
+    }
+}
+
+/// The heatmap's pixels: `height` rows of `width`, each the (view, share) of the
+/// block of elements it covers. The longer side of the layer runs across.
+pub fn heat_pixels(view: &LayerView, width: usize, height: usize) -> Vec<Vec<(ElementView, f32)>> {
+    let [out, inp] = view.shape;
+    let across_out = out >= inp;
+    let (cols, rows) = if across_out { (out, inp) } else { (inp, out) };
+    let (width, height) = (width.clamp(1, cols.max(1)), height.clamp(1, rows.max(1)));
+    (0..height)
+        .map(|py| {
+            let (r0, r1) = (py * rows / height, ((py + 1) * rows / height).max(py * rows / height + 1));
+            (0..width)
+                .map(|px| {
+                    let (c0, c1) = (px * cols / width, ((px + 1) * cols / width).max(px * cols / width + 1));
+                    let mut counts = [0u32; 6];
+                    for r in r0..r1 {
+                        for c in c0..c1 {
+                            let (o, i) = if across_out { (c, r) } else { (r, c) };
+                            counts[(view.codes[o * inp + i] as usize).min(5)] += 1;
+                        }
+                    }
+                    let total: u32 = counts.iter().sum();
+                    let (best, n) = counts.iter().enumerate().max_by_key(|(_, n)| **n).unwrap_or((0, &0));
+                    (ElementView::from_code(best as u8).unwrap_or(ElementView::Vacant), *n as f32 / total.max(1) as f32)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn shade(v: ElementView, share: f32) -> Color {
+    let (r, g, b) = view_color(v);
+    let k = 0.35 + 0.65 * share;
+    Color::Rgb((r as f32 * k) as u8, (g as f32 * k) as u8, (b as f32 * k) as u8)
+}
+
+/// A layer's heatmap in half-block cells.
+struct Heatmap<'a>(&'a LayerView);
+
+impl Widget for Heatmap<'_> {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        let pixels = heat_pixels(self.0, area.width as usize, area.height as usize * 2);
+        for (y, pair) in pixels.chunks(2).enumerate() {
+            for x in 0..pair[0].len() {
+                let top = pair[0][x];
+                let bottom = pair.get(1).map_or(top, |row| row[x]);
+                if let Some(cell) = buf.cell_mut((area.x + x as u16, area.y + y as u16)) {
+                    cell.set_char('▀').set_fg(shade(top.0, top.1)).set_bg(shade(bottom.0, bottom.1));
+                }
+            }
+        }
+    }
+}
+
+fn bar(fraction: f64, width: usize) -> String {
+    let filled = (fraction.clamp(0.0, 1.0) * width as f64).round() as usize;
+    format!("{}{}", "█".repeat(filled), "░".repeat(width - filled))
+}
+
+fn layer_line(stats: Option<&LayerMasks>, view: &LayerView, task: &str, width: u16) -> Line<'static> {
+    let total = (view.shape[0] * view.shape[1]).max(1) as f64;
+    let head = format!("{} {}x{} ", view.layer, view.shape[0], view.shape[1]);
+    let Some(s) = stats else { return Line::raw(head) };
+    let mine = s.per_task.iter().find(|p| p.task == task);
+    let (sel, vac, occ) = mine.map_or((0, 0, 0), |p| (p.selected, p.from_vacant, p.from_occupied));
+    let private: usize = s.private.get(task).copied().unwrap_or(0);
+    let tail = format!(
+        " sel {:.1}% (vac {:.1} occ {:.1}) priv {:.1}% · vacant {:.1}%",
+        100.0 * sel as f64 / total,
+        100.0 * vac as f64 / total,
+        100.0 * occ as f64 / total,
+        100.0 * private as f64 / total,
+        100.0 * s.vacant as f64 / total
+    );
+    let room = (width as usize).saturating_sub(head.chars().count() + tail.chars().count()).clamp(0, 16);
+    Line::from(vec![
+        Span::raw(head),
+        Span::styled(bar(sel as f64 / total, room), Style::new().fg(Color::Green)),
+        Span::raw(tail),
+    ])
+}
+
+/// The legend in two lines: the other tasks' states, then this task's.
+fn legend() -> [Line<'static>; 2] {
+    let line = |views: &[ElementView]| {
+        let mut spans = Vec::new();
+        for v in views {
+            let (r, g, b) = view_color(*v);
+            spans.push(Span::styled("■ ", Style::new().fg(Color::Rgb(r, g, b))));
+            spans.push(Span::raw(format!("{:<24}", v.label())));
+        }
+        Line::from(spans)
+    };
+    [line(&ElementView::ALL[..3]), line(&ElementView::ALL[3..])]
+}
+
+/// The share of the task's selected elements (in this network) that each other task selects too.
+fn overlap_line(app: &App, network: &str, task: &str) -> Line<'static> {
+    let Some(report) = &app.report else { return Line::raw("") };
+    let Some(net) = report.networks.iter().find(|n| n.name == network) else { return Line::raw("") };
+    let mut shared: Vec<(String, usize)> = Vec::new();
+    let mut own = 0;
+    for l in &net.layers {
+        let Some(i) = l.per_task.iter().position(|p| p.task == task) else { continue };
+        own += l.per_task[i].selected;
+        for (j, p) in l.per_task.iter().enumerate().filter(|(j, _)| *j != i) {
+            match shared.iter_mut().find(|(n, _)| *n == p.task) {
+                Some(e) => e.1 += l.overlap[i][j],
+                None => shared.push((p.task.clone(), l.overlap[i][j])),
+            }
+        }
+    }
+    let parts: Vec<String> = shared
+        .iter()
+        .map(|(n, c)| format!("{} {:.1}%", super::short_task(n), 100.0 * *c as f64 / own.max(1) as f64))
+        .collect();
+    Line::raw(format!("shared with: {}", if parts.is_empty() { "-".to_string() } else { parts.join("  ") }))
+}
+
+pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
+    let task = app.selected().map(|r| r.task).unwrap_or_default();
+    let views: Vec<&LayerView> = match &app.views {
+        Some((t, _, layers)) if app.opened.as_ref().and_then(|o| o.results.tasks.get(*t)) == Some(&task) => {
+            layers.iter().collect()
+        }
+        _ => Vec::new(),
+    };
+    let mut networks: Vec<&str> = Vec::new();
+    for v in &views {
+        if !networks.contains(&v.network.as_str()) {
+            networks.push(&v.network);
+        }
+    }
+    let network = networks.get(app.network % networks.len().max(1)).copied().unwrap_or("");
+    let live = match &app.views {
+        Some((_, Some(it), _)) => format!(" · live, iteration {it}"),
+        _ => String::new(),
+    };
+    let title =
+        format!("Masks: {task} · {network} ({}/{}){live}", app.network % networks.len().max(1) + 1, networks.len());
+    let inner = block(&title, focused).inner(area);
+    f.render_widget(block(&title, focused), area);
+    if views.is_empty() {
+        f.render_widget(Paragraph::new("waiting for the element views ..."), inner);
+        return;
+    }
+    let layers: Vec<&&LayerView> = views.iter().filter(|v| v.network == network).collect();
+    let stats = |name: &str| {
+        app.report.as_ref().and_then(|r| r.networks.iter().flat_map(|n| &n.layers).find(|l| l.name == name))
+    };
+    let [a, b] = legend();
+    f.render_widget(
+        Paragraph::new(vec![a, b, overlap_line(app, network, &task)]),
+        Rect { height: 3.min(inner.height), ..inner },
+    );
+    let body = Rect { y: inner.y + 3, height: inner.height.saturating_sub(3), ..inner };
+    let per_layer = (body.height / layers.len().max(1) as u16).max(2);
+    for (i, view) in layers.iter().enumerate() {
+        let y = body.y + i as u16 * per_layer;
+        if y + 1 >= body.y + body.height {
+            break;
+        }
+        let height = per_layer.min(body.y + body.height - y);
+        f.render_widget(
+            Paragraph::new(layer_line(stats(&view.layer), view, &task, body.width)),
+            Rect::new(body.x, y, body.width, 1),
+        );
+        let map = Rect::new(body.x, y + 1, body.width, height - 1);
+        if map.height > 0 {
+            f.render_widget(Heatmap(view), map);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heat_pixels_show_the_dominant_state_of_each_block() {
+        // 4 x 2 layer (out 4, in 2): the first two outputs selected from vacant, the rest vacant.
+        let codes = vec![3, 3, 3, 3, 0, 0, 0, 1];
+        let view = LayerView { network: "n".into(), layer: "n.l0".into(), shape: [4, 2], codes };
+        let px = heat_pixels(&view, 2, 1);
+        assert_eq!(px.len(), 1);
+        assert_eq!(px[0][0], (ElementView::SelectedFromVacant, 1.0));
+        assert_eq!(px[0][1], (ElementView::Vacant, 0.75));
+        let full = heat_pixels(&view, 10, 10);
+        assert_eq!((full.len(), full[0].len()), (2, 4), "never more pixels than elements");
+        assert_eq!(full[1][3], (ElementView::OccupiedByOthers, 1.0));
+    }
+}

@@ -1,0 +1,223 @@
+//! The session on its own thread: the worker opens the run folder (an
+//! existing run, the continuation of a shorter run, or a fresh run file),
+//! sends the UI one [`Opened`] snapshot, then serves commands (the session's
+//! own channel) and forwards every engine event. It starts paused: nothing
+//! trains until the user starts a step. A second thread steps the robot
+//! viewer of one task for the robot panel, at real time.
+
+use crate::cl::{Sequence, Switches};
+use crate::engine::{ChannelObserver, CommandSender, Event, OpenMode, Runner, SessionResults, Summary};
+use crate::nn::MaskReport;
+use crate::rl::{RobotFrame, RobotViewer};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Which run the workbench opens.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OpenSpec {
+    /// The run folder everything trained lands in.
+    pub run_dir: PathBuf,
+    /// The run file for a new folder (ignored when the folder holds a run).
+    pub config: Option<PathBuf>,
+    /// A shorter finished run that a new folder continues (its steps begin `config`'s sequence).
+    pub continues: Option<PathBuf>,
+}
+
+/// What the UI knows of a run when it opens.
+#[derive(Debug, Clone)]
+pub struct Opened {
+    pub run_dir: PathBuf,
+    /// How the folder was opened, in words.
+    pub origin: String,
+    pub method: String,
+    pub sequence: Sequence,
+    /// Tasks learned before the sequence (the base policy's).
+    pub base_tasks: Vec<String>,
+    pub switches: Switches,
+    pub results: SessionResults,
+    pub report: MaskReport,
+    pub summary: Summary,
+    /// The policy that recalls every learned task (the robot view runs it).
+    pub last_checkpoint: Option<PathBuf>,
+}
+
+/// A message from the worker thread.
+#[derive(Debug, Clone)]
+pub enum WorkerMsg {
+    Opened(Box<Opened>),
+    Event(Event),
+    /// The run could not be opened, or the session failed.
+    Failed(String),
+    /// The session thread ended (after a stop, results written).
+    Exited,
+    /// A robot frame of task `task`.
+    Robot {
+        task: String,
+        frame: Box<RobotFrame>,
+    },
+    /// The robot view could not start.
+    RobotFailed {
+        task: String,
+        error: String,
+    },
+}
+
+/// The session thread: commands go in through `commands` (once opened), messages come out.
+pub struct Worker {
+    pub messages: Receiver<WorkerMsg>,
+    sender: Sender<WorkerMsg>,
+    commands: Arc<std::sync::Mutex<Option<CommandSender>>>,
+    handle: Option<JoinHandle<()>>,
+    robot: Option<(Arc<AtomicBool>, JoinHandle<()>)>,
+}
+
+fn open(spec: &OpenSpec) -> anyhow::Result<(Runner, String)> {
+    let dir = &spec.run_dir;
+    let shown = dir.display();
+    if has_run(dir) {
+        let config = spec.config.clone().unwrap_or_else(|| dir.join(crate::engine::RUN_FILE));
+        return Ok((Runner::open(&config, dir, OpenMode::Resume, false)?, format!("reopened {shown}")));
+    }
+    let config = spec
+        .config
+        .as_deref()
+        .ok_or_else(|| anyhow::anyhow!("{shown} holds no run, and no --config names one to start"))?;
+    if let Some(prior) = spec.continues.as_deref().filter(|p| has_run(p)) {
+        let runner = Runner::continue_run(prior, config, dir, false)?;
+        return Ok((runner, format!("continues {} with {}", prior.display(), config.display())));
+    }
+    Ok((Runner::open(config, dir, OpenMode::New, false)?, format!("new run of {}", config.display())))
+}
+
+fn has_run(dir: &Path) -> bool {
+    crate::engine::RunDir::new(dir).has_run()
+}
+
+fn opened(runner: &Runner, origin: String) -> Opened {
+    let session = runner.session();
+    let results = session.results().clone();
+    let metrics = runner.metrics();
+    let sequence = session.sequence().clone();
+    let in_sequence = sequence.distinct_tasks();
+    Opened {
+        run_dir: runner.root().to_path_buf(),
+        origin,
+        method: results.method.clone(),
+        base_tasks: results.tasks.iter().filter(|t| !in_sequence.contains(t)).cloned().collect(),
+        switches: session.switches().clone(),
+        report: session.learner().mask_report(&results.tasks),
+        summary: metrics.summary,
+        last_checkpoint: runner.last_checkpoint().or_else(|| runner.base_policy()),
+        sequence,
+        results,
+    }
+}
+
+impl Worker {
+    /// Starts the session thread on `spec`.
+    pub fn spawn(spec: OpenSpec) -> Self {
+        let (sender, messages) = channel();
+        let commands = Arc::new(std::sync::Mutex::new(None));
+        let (tx, slot) = (sender.clone(), commands.clone());
+        let handle = std::thread::spawn(move || {
+            let (mut runner, origin) = match open(&spec) {
+                Ok(r) => r,
+                Err(e) => {
+                    let _ = tx.send(WorkerMsg::Failed(format!("{e:#}")));
+                    return;
+                }
+            };
+            let (etx, events) = channel::<Event>();
+            runner.session_mut().add_observer(Box::new(ChannelObserver(etx)));
+            runner.session_mut().pause();
+            runner.session_mut().set_pause_after_each_task(true);
+            if let Ok(mut s) = slot.lock() {
+                *s = Some(runner.session().command_sender());
+            }
+            let _ = tx.send(WorkerMsg::Opened(Box::new(opened(&runner, origin))));
+            let forward = {
+                let tx = tx.clone();
+                std::thread::spawn(move || events.iter().for_each(|e| drop(tx.send(WorkerMsg::Event(e)))))
+            };
+            if let Err(e) = runner.serve() {
+                let _ = tx.send(WorkerMsg::Failed(format!("{e:#}")));
+            }
+            drop(runner);
+            let _ = forward.join();
+            let _ = tx.send(WorkerMsg::Exited);
+        });
+        Self { messages, sender, commands, handle: Some(handle), robot: None }
+    }
+
+    /// Sends a command to the session (dropped before the run is open).
+    pub fn send(&self, command: crate::engine::Command) {
+        if let Some(s) = self.commands.lock().ok().and_then(|s| s.clone()) {
+            let _ = s.send(command);
+        }
+    }
+
+    /// Stops the session and waits for its thread (its results are written by then).
+    pub fn shutdown(&mut self) {
+        self.stop_robot();
+        self.send(crate::engine::Command::Stop);
+        if let Some(h) = self.handle.take() {
+            let _ = h.join();
+        }
+    }
+
+    /// Runs task `task` of the policy `policy` in the robot view (replacing any running one).
+    pub fn start_robot(&mut self, policy: PathBuf, task: String) {
+        self.stop_robot();
+        let stop = Arc::new(AtomicBool::new(false));
+        let (flag, tx) = (stop.clone(), self.sender.clone());
+        let handle = std::thread::spawn(move || {
+            let mut viewer = match RobotViewer::new(&policy, &task, 1, None) {
+                Ok(v) => v,
+                Err(e) => {
+                    let _ = tx.send(WorkerMsg::RobotFailed { task, error: format!("{e:#}") });
+                    return;
+                }
+            };
+            let dt = Duration::from_secs_f32(viewer.policy_dt());
+            let start = Instant::now();
+            let mut steps = 0u32;
+            while !flag.load(Ordering::Relaxed) {
+                match viewer.step() {
+                    Ok(frame) => {
+                        if tx.send(WorkerMsg::Robot { task: task.clone(), frame: Box::new(frame) }).is_err() {
+                            return;
+                        }
+                    }
+                    Err(e) => {
+                        let _ = tx.send(WorkerMsg::RobotFailed { task, error: format!("{e:#}") });
+                        return;
+                    }
+                }
+                steps += 1;
+                // Real time: sleep until this step's simulated time has passed.
+                if let Some(wait) = (dt * steps).checked_sub(start.elapsed()) {
+                    std::thread::sleep(wait);
+                }
+            }
+        });
+        self.robot = Some((stop, handle));
+    }
+
+    /// Stops the robot view's thread.
+    pub fn stop_robot(&mut self) {
+        if let Some((stop, handle)) = self.robot.take() {
+            stop.store(true, Ordering::Relaxed);
+            let _ = handle.join();
+        }
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        self.shutdown();
+    }
+}
