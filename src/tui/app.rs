@@ -403,6 +403,14 @@ impl App {
         }
     }
 
+    /// Asks the engine for the transfer preview of the next step's related tasks.
+    fn refresh_preview(&mut self) {
+        let (related, init) = self.next.related();
+        if self.next.step.is_some() && !related.is_empty() && init != crate::cl::TransferInit::Scratch {
+            self.send(Command::PreviewTransfer(related));
+        }
+    }
+
     fn task_id(&self, name: &str) -> Option<usize> {
         self.opened.as_ref()?.results.tasks.iter().position(|t| t == name)
     }
@@ -433,6 +441,7 @@ impl App {
                 // The last learned step: its curves and masks are the first thing to look at.
                 self.cursor = first_pending.saturating_sub(1);
                 self.follow_selection();
+                self.refresh_preview();
             }
             WorkerMsg::Event(e) => self.on_event(e),
             WorkerMsg::Failed(e) => {
@@ -494,6 +503,7 @@ impl App {
                     self.next.reset(o, next);
                 }
                 self.summary = Some(summary);
+                self.refresh_preview();
             }
             Event::Evaluated { evaluation, .. } => {
                 if let Some(o) = &mut self.opened {
@@ -520,7 +530,10 @@ impl App {
             Event::TransferPreview { related, layers } => self.next.preview = Some((related, layers)),
             Event::TaskAppended { spec, .. } => self.append(spec),
             Event::SwitchesQueued { overrides } => self.next.queued = self.next.queued.merged(&overrides),
-            Event::TransferQueued { related, init } => self.next.transfer = Some((related, init)),
+            Event::TransferQueued { related, init } => {
+                self.next.transfer = Some((related, init));
+                self.refresh_preview();
+            }
             Event::CommandRejected { error, .. } => {
                 self.next.input_error = self.next.input.is_some().then(|| error.clone());
                 self.say(format!("rejected: {error}"));

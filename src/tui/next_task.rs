@@ -136,10 +136,7 @@ impl NextTask {
                     }
                     None => related.push(name),
                 }
-                return vec![
-                    Command::SetNextTransfer { related: related.clone(), init },
-                    Command::PreviewTransfer(related),
-                ];
+                return vec![Command::SetNextTransfer { related, init }];
             }
         }
         vec![Command::SetNextSwitches(over)]

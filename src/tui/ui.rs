@@ -28,7 +28,7 @@ pub fn focus_order(screen: Screen) -> Vec<Panel> {
 /// Where each panel of `screen` goes in a terminal of `area`.
 pub fn panels(area: Rect, screen: Screen) -> Vec<(Panel, Rect)> {
     let [_, body, _] = Layout::vertical([Constraint::Length(1), Constraint::Min(0), Constraint::Length(1)]).areas(area);
-    let left_width = (body.width * 37 / 100).clamp(30, 48);
+    let left_width = (body.width * 37 / 100).clamp(32, 48);
     let [left, right] = Layout::horizontal([Constraint::Length(left_width), Constraint::Min(0)]).areas(body);
     let [timeline, training] = Layout::vertical([Constraint::Min(5), Constraint::Length(8)]).areas(left);
     let mut out = vec![(Panel::Timeline, timeline), (Panel::Training, training)];

@@ -67,11 +67,17 @@ struct Heatmap<'a>(&'a LayerView);
 
 impl Widget for Heatmap<'_> {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let pixels = heat_pixels(self.0, area.width as usize, area.height as usize * 2);
-        for (y, pair) in pixels.chunks(2).enumerate() {
-            for x in 0..pair[0].len() {
-                let top = pair[0][x];
-                let bottom = pair.get(1).map_or(top, |row| row[x]);
+        // At most one pixel per element; a small layer is stretched over the whole area.
+        let (w, h) = (area.width as usize, area.height as usize * 2);
+        let pixels = heat_pixels(self.0, w, h);
+        let (ph, pw) = (pixels.len(), pixels.first().map_or(0, |r| r.len()));
+        if ph == 0 || pw == 0 {
+            return;
+        }
+        let at = |x: usize, y: usize| pixels[y * ph / h][x * pw / w];
+        for y in 0..area.height as usize {
+            for x in 0..w {
+                let (top, bottom) = (at(x, 2 * y), at(x, 2 * y + 1));
                 if let Some(cell) = buf.cell_mut((area.x + x as u16, area.y + y as u16)) {
                     cell.set_char('▀').set_fg(shade(top.0, top.1)).set_bg(shade(bottom.0, bottom.1));
                 }

@@ -14,7 +14,7 @@ use ratatui::Frame;
 pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
     let wide = area.width >= 44;
     let mut lines = vec![Line::styled(
-        if wide { "  # task        kind status   budget     R" } else { "  # task        status       R" },
+        if wide { "  # task        kind status   budget     R" } else { "  # task       status       R" },
         Style::new().fg(Color::Gray).add_modifier(Modifier::UNDERLINED),
     )];
     let rows = app.rows();

@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# Opens the real workbench binary in tmux (120x40) on a copy of
+# scenes/smoke.toml with longer tasks, and checks the pane's text at each
+# stage: the first screen, the help overlay, the cursor, starting a step,
+# pausing it, resuming, quitting (with the question asked while training),
+# and that the run folder holds the results afterwards.
+#   scripts/tui_smoke.sh [BIN]      (default: builds and uses target/debug/quadcl)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BIN=${1:-}
+if [ -z "$BIN" ]; then
+  cargo build --quiet --bin quadcl
+  BIN=target/debug/quadcl
+fi
+command -v tmux >/dev/null || { echo "tui_smoke: tmux is not installed" >&2; exit 1; }
+
+TMP=$(mktemp -d)
+SESSION="quadcl-smoke-$$"
+cleanup() { tmux kill-session -t "$SESSION" 2>/dev/null || true; rm -rf "$TMP"; }
+trap cleanup EXIT
+sed 's/^iterations = 3$/iterations = 400/' scenes/smoke.toml > "$TMP/smoke.toml"
+
+pane() { tmux capture-pane -p -t "$SESSION" 2>/dev/null || true; }
+# wait_for TEXT STAGE [SECONDS]: until the pane shows TEXT (a grep -E pattern).
+wait_for() {
+  local deadline=$((SECONDS + ${3:-60}))
+  until pane | grep -Eq -- "$1"; do
+    if [ $SECONDS -ge $deadline ]; then
+      echo "tui_smoke: FAILED at '$2': no '$1' on the screen:" >&2
+      pane >&2
+      exit 1
+    fi
+    sleep 0.2
+  done
+  echo "tui_smoke: ok: $2"
+}
+# wait_gone TEXT STAGE: until the pane no longer shows TEXT.
+wait_gone() {
+  local deadline=$((SECONDS + 30))
+  while pane | grep -Eq -- "$1"; do
+    if [ $SECONDS -ge $deadline ]; then
+      echo "tui_smoke: FAILED at '$2': '$1' is still on the screen:" >&2
+      pane >&2
+      exit 1
+    fi
+    sleep 0.2
+  done
+  echo "tui_smoke: ok: $2"
+}
+
+tmux new-session -d -s "$SESSION" -x 120 -y 40 "$BIN tui --run $TMP/run --config $TMP/smoke.toml 2>$TMP/stderr; echo exited \$? > $TMP/exit; sleep 30"
+wait_for "Sequence" "the first screen"
+wait_for "› 0 crash:FL +new +pending" "the timeline with the cursor on step 0"
+wait_for "Masks: crash:FL" "the masks of the selected task"
+wait_for "Curves: performance" "the curves panel"
+tmux send-keys -t "$SESSION" '?'
+wait_for "this help" "the help overlay opens"
+tmux send-keys -t "$SESSION" Escape
+wait_gone "this help" "the help overlay closes"
+tmux send-keys -t "$SESSION" Down
+wait_for "› 1 invert:RR" "the cursor moves"
+tmux send-keys -t "$SESSION" ' '
+wait_for "training step 0 crash:FL" "the first step trains"
+wait_for "▶ +[0-9]+%" "the timeline shows its progress"
+tmux send-keys -t "$SESSION" ' '
+wait_for "paused step 0 crash:FL" "the step pauses"
+wait_for "‖ +[0-9]+%" "the timeline shows it paused"
+before=$(pane | grep -Eo '[0-9]+/400' | head -1)
+sleep 1
+after=$(pane | grep -Eo '[0-9]+/400' | head -1)
+[ "$before" = "$after" ] || { echo "tui_smoke: FAILED: training went on while paused ($before -> $after)" >&2; exit 1; }
+echo "tui_smoke: ok: nothing trains while paused ($after)"
+tmux send-keys -t "$SESSION" ' '
+wait_for "training step 0 crash:FL" "the step resumes"
+tmux send-keys -t "$SESSION" q
+wait_for "Quit now\?" "quitting while training asks first"
+tmux send-keys -t "$SESSION" n
+wait_gone "Quit now\?" "'n' keeps training"
+tmux send-keys -t "$SESSION" q
+wait_for "Quit now\?" "quitting asks again"
+tmux send-keys -t "$SESSION" y
+deadline=$((SECONDS + 60))
+until [ -f "$TMP/exit" ]; do
+  [ $SECONDS -lt $deadline ] || { echo "tui_smoke: FAILED: the workbench did not exit" >&2; pane >&2; exit 1; }
+  sleep 0.2
+done
+grep -q "exited 0" "$TMP/exit" || { echo "tui_smoke: FAILED: $(cat "$TMP/exit")" >&2; cat "$TMP/stderr" >&2; exit 1; }
+echo "tui_smoke: ok: the workbench exits 0"
+test -f "$TMP/run/metrics.json" && test -f "$TMP/run/run.toml" && grep -q '"stopped"' "$TMP/run/log.txt" \
+  || { echo "tui_smoke: FAILED: the run folder lacks metrics.json, run.toml or the stop in log.txt" >&2; ls -R "$TMP/run" >&2; exit 1; }
+echo "tui_smoke: ok: the run folder holds metrics.json, run.toml and the log"
+echo "tui_smoke: passed"

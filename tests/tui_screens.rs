@@ -1,0 +1,80 @@
+//! The workbench's screens on the shipped run (`policies/sequence-a1`
+//! continued with the 12-task sequence, into a temporary folder), drawn on
+//! ratatui's TestBackend and snapshotted (in `snapshots/`): the first screen
+//! at 120x40 and 80x24 with the masks of `crash:FL`, the evaluation matrix,
+//! the next-task controls, the help overlay, the robot panel with a
+//! simulated frame, and what a resize to too small a terminal shows.
+
+mod tui_common;
+use quadcl::tui::{Action, Screen, WorkerMsg};
+use tui_common::{act, open_shipped, root, screen};
+
+macro_rules! snap {
+    ($name:expr, $text:expr) => {
+        insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => true}, {
+            insta::assert_snapshot!($name, $text);
+        })
+    };
+}
+
+#[test]
+fn the_shipped_run_opens_on_every_screen() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (mut app, mut worker) = open_shipped(tmp.path(), (120, 40));
+    let hide = tmp.path();
+    let rows = app.rows();
+    assert_eq!(rows.len(), 13, "the base task and twelve steps");
+    assert_eq!(app.selected().unwrap().task, "crash:FR", "the last learned step is selected first");
+    // Up to crash:FL, and wait for its element views.
+    for _ in 0..2 {
+        app.update(Action::CursorUp);
+    }
+    let crash_fl = app.opened.as_ref().unwrap().results.tasks.iter().position(|t| t == "crash:FL").unwrap();
+    act(&mut app, &mut worker, Action::CursorUp, |a| a.views.as_ref().is_some_and(|v| v.0 == crash_fl));
+    assert_eq!(app.selected().unwrap().task, "crash:FL");
+    snap!("overview_crash_fl_120x40", screen(&app, 120, 40, hide));
+    snap!("overview_crash_fl_80x24", screen(&app, 80, 24, hide));
+    app.update(Action::Show(Screen::Evaluation));
+    snap!("evaluation_matrix_120x40", screen(&app, 120, 40, hide));
+    app.update(Action::Show(Screen::NextTask));
+    snap!("next_task_120x40", screen(&app, 120, 40, hide));
+    app.update(Action::ToggleHelp);
+    snap!("help_120x40", screen(&app, 120, 40, hide));
+    app.update(Action::ToggleHelp);
+    assert!(!app.help);
+
+    // The robot panel: stop the live thread and draw a frame simulated here (deterministic).
+    app.update(Action::Show(Screen::Robot));
+    worker.stop_robot();
+    let policy = root().join("policies/sequence-a1/checkpoints/step-03-crash_FR");
+    let mut viewer = quadcl::rl::RobotViewer::new(&policy, "crash:FL", 1, Some([0.5, 0.0, 0.0])).unwrap();
+    let mut frame = viewer.frame();
+    for _ in 0..50 {
+        frame = viewer.step().unwrap();
+    }
+    app.robot.frame = None;
+    app.update(Action::Worker(WorkerMsg::Robot { task: "crash:FL".into(), frame: Box::new(frame) }));
+    snap!("robot_crash_fl_120x40", screen(&app, 120, 40, hide));
+    worker.shutdown();
+}
+
+#[test]
+fn a_resize_below_80x24_says_so_and_a_resize_back_redraws_everything() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (mut app, _worker) = open_shipped(tmp.path(), (120, 40));
+    let mut terminal = ratatui::Terminal::new(ratatui::backend::TestBackend::new(120, 40)).unwrap();
+    terminal.draw(|f| quadcl::tui::ui::draw(f, &app)).unwrap();
+    for (w, h) in [(79, 24), (80, 23), (60, 10)] {
+        terminal.backend_mut().resize(w, h);
+        app.update(Action::Resize(w, h));
+        terminal.draw(|f| quadcl::tui::ui::draw(f, &app)).unwrap();
+        let text = format!("{:?}", terminal.backend().buffer());
+        assert!(text.contains("needs at least 80x24"), "{w}x{h}: {text}");
+    }
+    terminal.backend_mut().resize(80, 24);
+    app.update(Action::Resize(80, 24));
+    terminal.draw(|f| quadcl::tui::ui::draw(f, &app)).unwrap();
+    let text = format!("{:?}", terminal.backend().buffer());
+    assert!(!text.contains("needs at least") && text.contains("Sequence") && text.contains("Masks"), "{text}");
+    assert_eq!(app.size, (80, 24));
+}
