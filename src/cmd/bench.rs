@@ -21,6 +21,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let mut report = serde_json::Map::new();
     crate::bench::env::measure(args.seconds, &mut report)?;
     crate::bench::nn::measure(args.seconds, &mut report)?;
+    crate::bench::tui::measure(args.seconds, &mut report)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&serde_json::Value::Object(report))?);
     } else {

@@ -6,10 +6,11 @@
 //! statistics and element views all come from engine events.
 
 use super::next_task::NextTask;
-use super::timeline::{rows, Row, RowKind};
+pub use super::panels::curves::CurveMetric;
+use super::timeline::{rows, Row};
 use super::worker::{Opened, WorkerMsg};
-use crate::cl::{Switches, TaskSpec};
-use crate::engine::{Command, Evaluation, Event, StepRecord, Summary, TaskCurve};
+use crate::cl::Switches;
+use crate::engine::{Command, Evaluation, StepRecord, Summary, TaskCurve};
 use crate::nn::{LayerView, MaskReport};
 use crate::rl::RobotFrame;
 use std::path::PathBuf;
@@ -33,50 +34,6 @@ pub enum Panel {
     Matrix,
     Controls,
     Robot,
-}
-
-/// The training curve shown.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CurveMetric {
-    Performance,
-    Return,
-    LinVelErr,
-    AngVelErr,
-    FallRate,
-}
-
-impl CurveMetric {
-    pub fn label(self) -> &'static str {
-        match self {
-            CurveMetric::Performance => "performance",
-            CurveMetric::Return => "return",
-            CurveMetric::LinVelErr => "lin_vel_err m/s",
-            CurveMetric::AngVelErr => "ang_vel_err rad/s",
-            CurveMetric::FallRate => "fall rate",
-        }
-    }
-
-    /// The values of this metric in `curve`.
-    pub fn of(self, curve: &TaskCurve) -> &[f64] {
-        match self {
-            CurveMetric::Performance => &curve.performance,
-            CurveMetric::Return => &curve.episodic_return,
-            CurveMetric::LinVelErr => &curve.lin_vel_err,
-            CurveMetric::AngVelErr => &curve.ang_vel_err,
-            CurveMetric::FallRate => &curve.fall_rate,
-        }
-    }
-
-    fn next(self) -> Self {
-        use CurveMetric::*;
-        match self {
-            Performance => Return,
-            Return => LinVelErr,
-            LinVelErr => AngVelErr,
-            AngVelErr => FallRate,
-            FallRate => Performance,
-        }
-    }
 }
 
 /// Everything a key, a click or the worker can do.
@@ -199,6 +156,8 @@ pub struct App {
     pub messages: Vec<String>,
     pub size: (u16, u16),
     pub outbox: Vec<Outgoing>,
+    /// Something changed since the last frame (the event loop draws only then).
+    pub dirty: bool,
     clock: Clock,
 }
 
@@ -233,11 +192,12 @@ impl App {
             messages: Vec::new(),
             size,
             outbox: Vec::new(),
+            dirty: true,
             clock,
         }
     }
 
-    fn now(&mut self) -> f64 {
+    pub(super) fn now(&mut self) -> f64 {
         match &mut self.clock {
             Clock::Real(start) => start.elapsed().as_secs_f64(),
             Clock::Ticks(n) => {
@@ -267,7 +227,7 @@ impl App {
         self.live.is_some() && !self.paused && !self.stopped
     }
 
-    fn say(&mut self, message: impl Into<String>) {
+    pub(super) fn say(&mut self, message: impl Into<String>) {
         self.messages.push(message.into());
         let n = self.messages.len();
         if n > 50 {
@@ -281,6 +241,7 @@ impl App {
 
     /// Applies one action.
     pub fn update(&mut self, action: Action) {
+        self.dirty = true;
         match action {
             Action::Quit if self.is_training() => self.confirm_quit = true,
             Action::Quit | Action::ConfirmQuit(true) => {
@@ -386,7 +347,7 @@ impl App {
     }
 
     /// Asks for what the selected row's panels show: its element views, its robot.
-    fn follow_selection(&mut self) {
+    pub(super) fn follow_selection(&mut self) {
         let Some(row) = self.selected() else { return };
         let known = self.opened.as_ref().is_some_and(|o| o.results.tasks.contains(&row.task));
         if known && self.views.as_ref().map(|v| v.0) != self.task_id(&row.task) {
@@ -404,7 +365,7 @@ impl App {
     }
 
     /// Asks the engine for the transfer preview of the next step's related tasks.
-    fn refresh_preview(&mut self) {
+    pub(super) fn refresh_preview(&mut self) {
         let (related, init) = self.next.related();
         if self.next.step.is_some() && !related.is_empty() && init != crate::cl::TransferInit::Scratch {
             self.send(Command::PreviewTransfer(related));
@@ -428,144 +389,5 @@ impl App {
         } else {
             self.send(Command::Pause);
         }
-    }
-
-    fn on_worker(&mut self, msg: WorkerMsg) {
-        match msg {
-            WorkerMsg::Opened(o) => {
-                self.report = Some(o.report.clone());
-                self.summary = Some(o.summary.clone());
-                let first_pending = o.base_tasks.len() + o.results.steps.len();
-                self.next.reset(&o, o.results.steps.len());
-                self.opened = Some(*o);
-                // The last learned step: its curves and masks are the first thing to look at.
-                self.cursor = first_pending.saturating_sub(1);
-                self.follow_selection();
-                self.refresh_preview();
-            }
-            WorkerMsg::Event(e) => self.on_event(e),
-            WorkerMsg::Failed(e) => {
-                self.say(format!("failed: {e}"));
-                self.failure = Some(e);
-                self.stopped = true;
-            }
-            WorkerMsg::Exited => self.stopped = true,
-            WorkerMsg::Robot { task, frame } if self.robot.task.as_ref() == Some(&task) => {
-                self.robot.frame = Some(*frame);
-            }
-            WorkerMsg::Robot { .. } => {}
-            WorkerMsg::RobotFailed { task, error } => {
-                self.robot.error = Some(error.clone());
-                self.say(format!("robot view of {task}: {error}"));
-            }
-        }
-    }
-
-    fn on_event(&mut self, e: Event) {
-        match e {
-            Event::TaskStarted { step, task, name, iterations, switches, related, repeat } => {
-                let record = StepRecord { step, task, name: name.clone(), iterations, switches, related, repeat };
-                let curve = TaskCurve { step, task, name, ..Default::default() };
-                self.live = Some(Live { record, iteration: 0, curve, arrivals: Vec::new(), sps: None });
-                self.next.task_started();
-                if let Some(o) = &self.opened {
-                    self.next.reset(o, step + 1);
-                    // Follow the step that trains: its live curve and masks.
-                    self.cursor = o.base_tasks.len() + step;
-                }
-                self.follow_selection();
-            }
-            Event::Iteration { iteration, metrics, .. } => {
-                let now = self.now();
-                if let Some(l) = &mut self.live {
-                    l.iteration = iteration;
-                    l.curve.push(&metrics);
-                    l.sps = metrics.get(crate::rl::metric_names::SPS).copied().or(l.sps);
-                    l.arrivals.push(now);
-                    if l.arrivals.len() > 10 {
-                        l.arrivals.remove(0);
-                    }
-                }
-            }
-            Event::MaskStats { report, .. } => self.report = Some(report),
-            Event::Measures { after_step, eval_matrix, summary } => {
-                let live = self.live.take();
-                if let Some(o) = &mut self.opened {
-                    if let Some(l) = live.filter(|l| l.record.step == after_step) {
-                        o.results.steps.push(l.record);
-                        o.results.curves.push(l.curve);
-                    }
-                    o.results.eval_matrix = eval_matrix;
-                    if let Some(s) = o.results.steps.last() {
-                        o.last_checkpoint = Some(crate::engine::RunDir::new(&o.run_dir).checkpoint(s.step, &s.name));
-                    }
-                    let next = o.results.steps.len();
-                    self.next.reset(o, next);
-                }
-                self.summary = Some(summary);
-                self.refresh_preview();
-            }
-            Event::Evaluated { evaluation, .. } => {
-                if let Some(o) = &mut self.opened {
-                    if o.results.evaluations.len() < o.results.steps.len() + 1 {
-                        o.results.evaluations.push(Vec::new());
-                    }
-                    if let Some(row) = o.results.evaluations.last_mut() {
-                        row.push(evaluation);
-                    }
-                }
-            }
-            Event::MaskViews { task, iteration, layers } => self.views = Some((task, iteration, layers)),
-            Event::EvaluatedNow { evaluation } => {
-                self.say(format!(
-                    "{}: performance {:.3}, return {:.2}, lin_vel_err {:.3}, fall rate {:.2}",
-                    evaluation.report.task,
-                    evaluation.performance,
-                    evaluation.report.mean_return,
-                    evaluation.report.lin_vel_err,
-                    evaluation.report.fall_rate
-                ));
-                self.last_eval = Some(evaluation);
-            }
-            Event::TransferPreview { related, layers } => self.next.preview = Some((related, layers)),
-            Event::TaskAppended { spec, .. } => self.append(spec),
-            Event::SwitchesQueued { overrides } => self.next.queued = self.next.queued.merged(&overrides),
-            Event::TransferQueued { related, init } => {
-                self.next.transfer = Some((related, init));
-                self.refresh_preview();
-            }
-            Event::CommandRejected { error, .. } => {
-                self.next.input_error = self.next.input.is_some().then(|| error.clone());
-                self.say(format!("rejected: {error}"));
-            }
-            Event::Failed { error } => {
-                self.say(format!("training failed: {error}"));
-                self.failure = Some(error);
-            }
-            Event::Paused { .. } => self.paused = true,
-            Event::Resumed { .. } => self.paused = false,
-            Event::Stopped { .. } => self.stopped = true,
-            Event::SequenceFinished { steps } => self.say(format!("the sequence is done ({steps} steps)")),
-            Event::TaskEnded { .. } => {}
-        }
-    }
-
-    fn append(&mut self, spec: TaskSpec) {
-        self.next.input = None;
-        self.next.input_error = None;
-        self.say(format!("added {} at the end of the sequence", spec.name));
-        if let Some(o) = &mut self.opened {
-            if !o.results.tasks.contains(&spec.name) {
-                o.results.tasks.push(spec.name.clone());
-                o.results.eval_matrix.tasks.push(spec.name.clone());
-                o.results.eval_matrix.rows.iter_mut().for_each(|r| r.push(None));
-            }
-            o.sequence.tasks.push(spec);
-        }
-    }
-
-    /// The kind of the selected row (for panels that differ by kind).
-    pub fn selected_kind(&self) -> Option<RowKind> {
-        self.selected().map(|r| r.kind)
     }
 }

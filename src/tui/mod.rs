@@ -7,6 +7,7 @@
 //! every exit path, a panic included.
 
 pub mod app;
+mod events;
 pub mod input;
 pub mod next_task;
 pub mod panels;
@@ -53,7 +54,8 @@ pub fn dispatch(app: &mut App, worker: &mut Worker) {
     }
 }
 
-/// One pass of the loop: the worker's messages in, the queued commands out, one frame drawn.
+/// One pass of the loop: the worker's messages in, the queued commands out, and a frame
+/// drawn if anything changed (a training iteration or a robot frame, a key, a resize).
 pub fn tick<B: Backend>(terminal: &mut Terminal<B>, app: &mut App, worker: &mut Worker) -> anyhow::Result<()>
 where
     B::Error: Send + Sync + 'static,
@@ -62,7 +64,9 @@ where
         app.update(Action::Worker(m));
     }
     dispatch(app, worker);
-    terminal.draw(|f| ui::draw(f, app))?;
+    if std::mem::take(&mut app.dirty) {
+        terminal.draw(|f| ui::draw(f, app))?;
+    }
     Ok(())
 }
 

@@ -32,7 +32,7 @@ pub struct Row {
     pub kind: RowKind,
     pub status: RowStatus,
     pub budget: Option<usize>,
-    /// Performance on the step's task right after the step (R[step][task]).
+    /// Performance on the step's task right after the step (`R[step][task]`).
     pub performance: Option<f64>,
     /// The row's task is learned (here or at an earlier step): it can be recalled now.
     pub recallable: bool,

@@ -49,7 +49,7 @@ pub struct Opened {
 #[derive(Debug, Clone)]
 pub enum WorkerMsg {
     Opened(Box<Opened>),
-    Event(Event),
+    Event(Box<Event>),
     /// The run could not be opened, or the session failed.
     Failed(String),
     /// The session thread ended (after a stop, results written).
@@ -141,7 +141,7 @@ impl Worker {
             let _ = tx.send(WorkerMsg::Opened(Box::new(opened(&runner, origin))));
             let forward = {
                 let tx = tx.clone();
-                std::thread::spawn(move || events.iter().for_each(|e| drop(tx.send(WorkerMsg::Event(e)))))
+                std::thread::spawn(move || events.iter().for_each(|e| drop(tx.send(WorkerMsg::Event(Box::new(e))))))
             };
             if let Err(e) = runner.serve() {
                 let _ = tx.send(WorkerMsg::Failed(format!("{e:#}")));

@@ -58,7 +58,14 @@ pub fn pump(app: &mut App, worker: &mut Worker, until: impl Fn(&App) -> bool) {
         if until(app) {
             return;
         }
-        assert!(start.elapsed() < Duration::from_secs(20), "the workbench did not get there; messages: {:?}; paused {} live {:?} steps {:?}", app.messages, app.paused, app.live.as_ref().map(|l| l.iteration), app.opened.as_ref().map(|o| o.results.steps.len()));
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the workbench did not get there; messages: {:?}; paused {} live {:?} steps {:?}",
+            app.messages,
+            app.paused,
+            app.live.as_ref().map(|l| l.iteration),
+            app.opened.as_ref().map(|o| o.results.steps.len())
+        );
         if let Ok(m) = worker.messages.recv_timeout(Duration::from_millis(50)) {
             app.update(Action::Worker(m));
         }

@@ -13,6 +13,51 @@ use ratatui::text::Line;
 use ratatui::widgets::{Axis, Chart, Dataset, GraphType, Paragraph};
 use ratatui::Frame;
 
+/// The training curve shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CurveMetric {
+    Performance,
+    Return,
+    LinVelErr,
+    AngVelErr,
+    FallRate,
+}
+
+impl CurveMetric {
+    pub fn label(self) -> &'static str {
+        match self {
+            CurveMetric::Performance => "performance",
+            CurveMetric::Return => "return",
+            CurveMetric::LinVelErr => "lin_vel_err m/s",
+            CurveMetric::AngVelErr => "ang_vel_err rad/s",
+            CurveMetric::FallRate => "fall rate",
+        }
+    }
+
+    /// The values of this metric in `curve`.
+    pub fn of(self, curve: &TaskCurve) -> &[f64] {
+        match self {
+            CurveMetric::Performance => &curve.performance,
+            CurveMetric::Return => &curve.episodic_return,
+            CurveMetric::LinVelErr => &curve.lin_vel_err,
+            CurveMetric::AngVelErr => &curve.ang_vel_err,
+            CurveMetric::FallRate => &curve.fall_rate,
+        }
+    }
+
+    /// The next metric in the cycle.
+    pub fn next(self) -> Self {
+        use CurveMetric::*;
+        match self {
+            Performance => Return,
+            Return => LinVelErr,
+            LinVelErr => AngVelErr,
+            AngVelErr => FallRate,
+            FallRate => Performance,
+        }
+    }
+}
+
 /// Debiased exponential moving average (as TensorBoard's smoothing): s_t = w s_(t-1) + (1 - w) x_t, divided by 1 - w^t.
 pub fn debiased_ema(values: &[f64], weight: f64) -> Vec<f64> {
     let mut s = 0.0;

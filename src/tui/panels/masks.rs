@@ -1,7 +1,7 @@
 //! The selected task's masks, per layer of one network (n cycles actor,
 //! critic, CENet, ...): a density heatmap of element states in half-block
-//! cells (two pixels per cell; each pixel a block of elements, coloured by
-//! its most common state, dimmer the less of the block that state holds),
+//! cells (two pixels per cell; each pixel a block of elements, its colour
+//! the states' colours mixed in the block's proportions),
 //! per-layer fractions as bars, a legend, and the task's overlap with every
 //! other task. The element views and statistics are the engine's.
 
@@ -27,9 +27,10 @@ pub fn view_color(v: ElementView) -> (u8, u8, u8) {
     }
 }
 
-/// The heatmap's pixels: `height` rows of `width`, each the (view, share) of the
-/// block of elements it covers. The longer side of the layer runs across.
-pub fn heat_pixels(view: &LayerView, width: usize, height: usize) -> Vec<Vec<(ElementView, f32)>> {
+/// The heatmap's pixels: at most `height` rows of `width` (never more than the layer has
+/// elements), each the count of every view in the block of elements it covers (indexed
+/// by code). The longer side of the layer runs across.
+pub fn heat_pixels(view: &LayerView, width: usize, height: usize) -> Vec<Vec<[u32; 6]>> {
     let [out, inp] = view.shape;
     let across_out = out >= inp;
     let (cols, rows) = if across_out { (out, inp) } else { (inp, out) };
@@ -47,19 +48,24 @@ pub fn heat_pixels(view: &LayerView, width: usize, height: usize) -> Vec<Vec<(El
                             counts[(view.codes[o * inp + i] as usize).min(5)] += 1;
                         }
                     }
-                    let total: u32 = counts.iter().sum();
-                    let (best, n) = counts.iter().enumerate().max_by_key(|(_, n)| **n).unwrap_or((0, &0));
-                    (ElementView::from_code(best as u8).unwrap_or(ElementView::Vacant), *n as f32 / total.max(1) as f32)
+                    counts
                 })
                 .collect()
         })
         .collect()
 }
 
-fn shade(v: ElementView, share: f32) -> Color {
-    let (r, g, b) = view_color(v);
-    let k = 0.35 + 0.65 * share;
-    Color::Rgb((r as f32 * k) as u8, (g as f32 * k) as u8, (b as f32 * k) as u8)
+/// The colours of a block's views mixed in proportion to their counts.
+pub fn mix(counts: &[u32; 6]) -> Color {
+    let total = counts.iter().sum::<u32>().max(1) as f32;
+    let mut rgb = [0.0f32; 3];
+    for (v, n) in ElementView::ALL.iter().zip(counts) {
+        let (r, g, b) = view_color(*v);
+        for (acc, c) in rgb.iter_mut().zip([r, g, b]) {
+            *acc += c as f32 * *n as f32 / total;
+        }
+    }
+    Color::Rgb(rgb[0].round() as u8, rgb[1].round() as u8, rgb[2].round() as u8)
 }
 
 /// A layer's heatmap in half-block cells.
@@ -74,12 +80,12 @@ impl Widget for Heatmap<'_> {
         if ph == 0 || pw == 0 {
             return;
         }
-        let at = |x: usize, y: usize| pixels[y * ph / h][x * pw / w];
+        let at = |x: usize, y: usize| &pixels[y * ph / h][x * pw / w];
         for y in 0..area.height as usize {
             for x in 0..w {
                 let (top, bottom) = (at(x, 2 * y), at(x, 2 * y + 1));
                 if let Some(cell) = buf.cell_mut((area.x + x as u16, area.y + y as u16)) {
-                    cell.set_char('▀').set_fg(shade(top.0, top.1)).set_bg(shade(bottom.0, bottom.1));
+                    cell.set_char('▀').set_fg(mix(top)).set_bg(mix(bottom));
                 }
             }
         }
@@ -211,16 +217,23 @@ mod tests {
     use super::*;
 
     #[test]
-    fn heat_pixels_show_the_dominant_state_of_each_block() {
-        // 4 x 2 layer (out 4, in 2): the first two outputs selected from vacant, the rest vacant.
+    fn heat_pixels_count_the_states_of_each_block_and_mix_their_colours() {
+        // 4 x 2 layer (out 4, in 2): the first two outputs selected from vacant, the rest vacant
+        // but for one occupied element.
         let codes = vec![3, 3, 3, 3, 0, 0, 0, 1];
         let view = LayerView { network: "n".into(), layer: "n.l0".into(), shape: [4, 2], codes };
         let px = heat_pixels(&view, 2, 1);
         assert_eq!(px.len(), 1);
-        assert_eq!(px[0][0], (ElementView::SelectedFromVacant, 1.0));
-        assert_eq!(px[0][1], (ElementView::Vacant, 0.75));
+        assert_eq!(px[0][0], [0, 0, 0, 4, 0, 0]);
+        assert_eq!(px[0][1], [3, 1, 0, 0, 0, 0]);
         let full = heat_pixels(&view, 10, 10);
         assert_eq!((full.len(), full[0].len()), (2, 4), "never more pixels than elements");
-        assert_eq!(full[1][3], (ElementView::OccupiedByOthers, 1.0));
+        assert_eq!(full[1][3], [0, 1, 0, 0, 0, 0]);
+        let (r, g, b) = view_color(ElementView::SelectedFromVacant);
+        assert_eq!(mix(&px[0][0]), Color::Rgb(r, g, b));
+        let (vr, _, _) = view_color(ElementView::Vacant);
+        let (or, _, _) = view_color(ElementView::OccupiedByOthers);
+        let Color::Rgb(red, _, _) = mix(&px[0][1]) else { panic!("an RGB colour") };
+        assert_eq!(red, ((3.0 * vr as f32 + or as f32) / 4.0).round() as u8, "3 vacant to 1 occupied");
     }
 }

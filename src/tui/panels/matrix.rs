@@ -1,4 +1,4 @@
-//! The evaluation matrix R[i][j] (performance on task j after step i) as a
+//! The evaluation matrix `R[i][j]` (performance on task j after step i) as a
 //! coloured table, forgetting per task, and the summary measures: average
 //! performance, forgetting, plasticity, forward transfer, command tracking.
 //! All from the engine's `Measures` events (or `metrics.json` when opened).
