@@ -7,7 +7,11 @@
 //! Keys: `tui_frame_ms_200x60` (the slowest screen's median),
 //! `tui_frame_ms_200x60_{overview,evaluation,next_task,robot}`,
 //! `tui_train_iterations_per_s`, `headless_train_iterations_per_s`,
-//! `tui_training_cost` (1 - with UI / headless). Run from the repository
+//! `tui_training_cost` (1 - with UI / headless: the same seed and run file,
+//! so the same work, but one short run each, so it wanders by 10-20 % with
+//! the machine), and `tui_ui_cpu_share`: the CPU time of the UI thread over
+//! the wall time times the cores, i.e. the share of the machine the open UI
+//! takes from training (Linux: `/proc/thread-self/stat`). Run from the repository
 //! root (the frame figures need `policies/sequence-a1`; without it they are skipped).
 
 use quadcl::engine::{Event, Observer, OpenMode, Runner};
@@ -126,6 +130,16 @@ impl Observer for Stamps {
     }
 }
 
+/// CPU seconds this thread has used (Linux; None elsewhere).
+fn thread_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    // Fields after the command name (which is in parentheses): utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
 /// Iterations per second after the first `warm` iterations.
 fn rate(stamps: &[Instant], warm: usize) -> f64 {
     match stamps.get(warm..) {
@@ -159,6 +173,7 @@ fn training(seconds: f64, report: &mut Report) -> anyhow::Result<()> {
     app.update(Action::StartPause);
     let mut arrivals: Vec<Instant> = Vec::new();
     let mut seen = 0;
+    let cpu_start = thread_cpu_seconds();
     let start = Instant::now();
     while start.elapsed() < budget || arrivals.len() < warm + 3 {
         let frame_start = Instant::now();
@@ -172,8 +187,12 @@ fn training(seconds: f64, report: &mut Report) -> anyhow::Result<()> {
             std::thread::sleep(wait);
         }
     }
+    let (wall, cpu_end) = (start.elapsed().as_secs_f64(), thread_cpu_seconds());
     worker.shutdown();
     let with_ui = rate(&arrivals, warm);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    let share = cpu_start.zip(cpu_end).map(|(a, b)| ((b - a) / (wall * cores) * 10000.0).round() / 10000.0);
+    report.insert("tui_ui_cpu_share".into(), json!(share));
     report.insert("headless_train_iterations_per_s".into(), json!((headless * 1000.0).round() / 1000.0));
     report.insert("tui_train_iterations_per_s".into(), json!((with_ui * 1000.0).round() / 1000.0));
     report.insert("tui_training_cost".into(), json!(((1.0 - with_ui / headless) * 1000.0).round() / 1000.0));

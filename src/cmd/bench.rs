@@ -10,6 +10,9 @@ pub struct BenchArgs {
     /// Seconds to spend on each measurement.
     #[arg(long, default_value_t = 2.0)]
     pub seconds: f64,
+    /// Only these sections (comma-separated: env, nn, tui); all by default.
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
@@ -18,10 +21,21 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         "--seconds must be a finite number > 0, got {}",
         args.seconds
     );
+    const SECTIONS: [&str; 3] = ["env", "nn", "tui"];
+    if let Some(bad) = args.only.iter().find(|s| !SECTIONS.contains(&s.as_str())) {
+        anyhow::bail!("--only: unknown section {bad:?} (sections: {})", SECTIONS.join(", "));
+    }
+    let wanted = |s: &str| args.only.is_empty() || args.only.iter().any(|o| o == s);
     let mut report = serde_json::Map::new();
-    crate::bench::env::measure(args.seconds, &mut report)?;
-    crate::bench::nn::measure(args.seconds, &mut report)?;
-    crate::bench::tui::measure(args.seconds, &mut report)?;
+    if wanted("env") {
+        crate::bench::env::measure(args.seconds, &mut report)?;
+    }
+    if wanted("nn") {
+        crate::bench::nn::measure(args.seconds, &mut report)?;
+    }
+    if wanted("tui") {
+        crate::bench::tui::measure(args.seconds, &mut report)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&serde_json::Value::Object(report))?);
     } else {
