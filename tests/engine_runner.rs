@@ -166,3 +166,47 @@ fn a_longer_sequence_continues_a_shorter_run_without_touching_it() {
     let err = Runner::continue_run(&prior, &other, &tmp.path().join("o2"), false).err().unwrap();
     assert!(format!("{err:#}").contains("seed"), "{err:#}");
 }
+
+#[test]
+fn settings_chosen_for_the_next_step_survive_a_reopen_and_an_interrupted_step_retrains_as_chosen() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = write(tmp.path(), "run.toml", &format!("{HEAD}{TWO}[[task]]\nname = \"noise:FR\"\n"));
+    let change = SwitchOverrides { capacity: Some(0.3), ..Default::default() };
+    let related = (vec!["crash:FL".to_string()], quadcl::cl::TransferInit::Related);
+
+    // A: step 0, then the change for step 1 queued, stop before it starts, reopen, finish.
+    let a = tmp.path().join("a");
+    let mut runner = Runner::open(&cfg, &a, OpenMode::New, false).unwrap();
+    runner.train(Some(1)).unwrap();
+    runner.session_mut().set_next_switches(change.clone()).unwrap();
+    runner.session_mut().set_next_transfer(related.0.clone(), related.1).unwrap();
+    runner.session_mut().stop();
+    runner.serve().unwrap();
+    assert!(a.join("next-step.json").exists());
+    let mut runner = Runner::open(&cfg, &a, OpenMode::Resume, false).unwrap();
+    assert_eq!(runner.session().queued_switches(), &change);
+    assert_eq!(runner.session().queued_transfer(), Some(&related));
+    assert_eq!(runner.train(None).unwrap(), StepOutcome::SequenceDone);
+    assert!(!a.join("next-step.json").exists(), "nothing is pending once the step ran");
+    let done_a = runner.metrics();
+    assert_eq!(done_a.steps[1].switches.capacity, 0.3);
+    assert_eq!(done_a.steps[1].related, vec![0]);
+
+    // B: the same, but step 1 is stopped after two of its iterations; reopened, it retrains from its start.
+    let b = tmp.path().join("b");
+    let mut runner = Runner::open(&cfg, &b, OpenMode::New, false).unwrap();
+    runner.train(Some(1)).unwrap();
+    runner.session_mut().set_next_switches(change.clone()).unwrap();
+    runner.session_mut().set_next_transfer(related.0.clone(), related.1).unwrap();
+    runner.session_mut().step_iteration().unwrap();
+    runner.session_mut().step_iteration().unwrap();
+    runner.session_mut().stop();
+    runner.serve().unwrap();
+    let mut runner = Runner::open(&cfg, &b, OpenMode::Resume, false).unwrap();
+    assert_eq!(runner.session().completed_steps(), 1);
+    assert_eq!(runner.train(None).unwrap(), StepOutcome::SequenceDone);
+    let done_b = runner.metrics();
+    assert_eq!(done_b.curves, done_a.curves, "the interrupted step retrained exactly as chosen");
+    assert_eq!(done_b.eval_matrix, done_a.eval_matrix);
+    assert_eq!(done_b.steps, done_a.steps);
+}

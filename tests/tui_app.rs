@@ -167,3 +167,34 @@ fn next_task_controls_queue_switches_and_transfer_and_typed_tasks() {
     assert!(app.next.input.is_none() && app.next.input_error.is_none());
     assert_eq!(app.rows()[3].task, "invert:RR+noise:FR");
 }
+
+/// Key presses one by one, then nothing (the loop waits for the app to quit).
+struct Script(std::collections::VecDeque<ratatui::crossterm::event::Event>);
+
+impl quadcl::tui::EventSource for Script {
+    fn next(&mut self, _timeout: std::time::Duration) -> anyhow::Result<Option<ratatui::crossterm::event::Event>> {
+        Ok(self.0.pop_front())
+    }
+}
+
+fn key(c: char) -> ratatui::crossterm::event::Event {
+    use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyModifiers};
+    Event::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE))
+}
+
+#[test]
+fn the_event_loop_runs_on_a_test_backend_with_scripted_keys_until_q() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (mut app, mut worker) = open_toy(tmp.path(), (100, 30));
+    let mut terminal = ratatui::Terminal::new(ratatui::backend::TestBackend::new(100, 30)).unwrap();
+    let resize = ratatui::crossterm::event::Event::Resize(100, 30);
+    let mut script = Script([key('2'), key('?'), key('x'), resize, key('3'), key('q')].into_iter().collect());
+    quadcl::tui::run_app(&mut terminal, &mut app, &mut worker, &mut script).unwrap();
+    assert!(app.quit);
+    assert_eq!(app.screen, Screen::NextTask);
+    assert!(!app.help, "any key closed the help");
+    let shown = format!("{:?}", terminal.backend().buffer());
+    assert!(shown.contains("Next task"), "the last frame is the Next task screen: {shown}");
+    assert_eq!(app.messages.last().unwrap(), "stopping: writing the results ...");
+    assert!(tmp.path().join("run/metrics.json").exists());
+}

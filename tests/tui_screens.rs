@@ -34,12 +34,29 @@ fn the_shipped_run_opens_on_every_screen() {
     assert_eq!(app.selected().unwrap().task, "crash:FL");
     snap!("overview_crash_fl_120x40", screen(&app, 120, 40, hide));
     snap!("overview_crash_fl_80x24", screen(&app, 80, 24, hide));
+    // Each panel alone, at the size it has on a 120x40 screen.
+    use quadcl::tui::panels;
+    type Draw = fn(&mut ratatui::Frame, ratatui::layout::Rect, &quadcl::tui::App, bool);
+    let alone: [(&str, Draw, u16, u16); 7] = [
+        ("panel_timeline", panels::timeline::draw, 44, 30),
+        ("panel_training", panels::training::draw, 44, 8),
+        ("panel_curves", panels::curves::draw, 76, 14),
+        ("panel_masks", panels::masks::draw, 76, 24),
+        ("panel_matrix", panels::matrix::draw, 76, 30),
+        ("panel_controls", panels::controls::draw, 76, 30),
+        ("panel_robot_waiting", panels::robot::draw, 76, 12),
+    ];
+    for (name, draw, w, h) in alone {
+        snap!(name, tui_common::panel(&app, w, h, hide, draw));
+    }
     app.update(Action::Show(Screen::Evaluation));
     snap!("evaluation_matrix_120x40", screen(&app, 120, 40, hide));
+    snap!("evaluation_matrix_80x24", screen(&app, 80, 24, hide));
     app.update(Action::Show(Screen::NextTask));
     snap!("next_task_120x40", screen(&app, 120, 40, hide));
     app.update(Action::ToggleHelp);
     snap!("help_120x40", screen(&app, 120, 40, hide));
+    snap!("help_80x24", screen(&app, 80, 24, hide));
     app.update(Action::ToggleHelp);
     assert!(!app.help);
 

@@ -47,7 +47,7 @@ fn a_scripted_session_starts_a_task_changes_a_switch_composes_a_related_task_and
     (0..6).for_each(|_| app.update(Action::ControlDown));
     assert_eq!(app.next.cursor, 6, "the first related task (the switches, then the mode)");
     act(&mut app, &mut worker, Action::ControlChange(0), |a| {
-        a.next.preview.as_ref().is_some_and(|(names, _)| names == &["crash:FL".to_string()])
+        a.next.preview.as_ref().is_some_and(|p| p.related == ["crash:FL".to_string()] && p.lifted_from == p.related)
     });
     snap!("related_composed", screen(&app, 120, 40, hide));
 

@@ -42,8 +42,16 @@ pub enum Event {
     MaskViews { task: TaskId, iteration: Option<usize>, layers: Vec<LayerView> },
     /// A finished task evaluated on request ([`Command::Evaluate`]), outside the matrix.
     EvaluatedNow { evaluation: Evaluation },
-    /// The elements the transfer bonus would lift for a next task naming `related`.
-    TransferPreview { related: Vec<String>, layers: Vec<LayerLift> },
+    /// The elements the transfer bonus would lift for step `step` starting with `related` and
+    /// `init`: `lifted_from` the tasks it resolves to (drawn, for `random`), none for a repeat.
+    TransferPreview {
+        step: usize,
+        related: Vec<String>,
+        init: TransferInit,
+        lifted_from: Vec<String>,
+        repeat: bool,
+        layers: Vec<LayerLift>,
+    },
     /// A task was added at the end of the sequence (as step `step`).
     TaskAppended { step: usize, spec: TaskSpec },
     /// A command could not be carried out; the session goes on unchanged.
@@ -85,8 +93,9 @@ pub enum Command {
     /// Report the element views of a task now, after each task, and every few
     /// iterations while it trains (answered by [`Event::MaskViews`]).
     WatchMasks(String),
-    /// Preview the transfer bonus of these related tasks (answered by [`Event::TransferPreview`]).
-    PreviewTransfer(Vec<String>),
+    /// Preview the transfer bonus of the next step with these related tasks and mode
+    /// (answered by [`Event::TransferPreview`]).
+    PreviewTransfer { related: Vec<String>, init: TransferInit },
     /// Add a task at the end of the sequence (validated as a run file's entry).
     AppendTask(TaskSpec),
     /// Write the results now (a runner's business; see `engine::Runner`).

@@ -3,7 +3,9 @@
 //! - `run.toml`: a copy of the run file (a resumed run must match it);
 //! - `metrics.json`: the measures and everything needed to resume (see [`MetricsFile`]);
 //! - `checkpoints/step-NN-TASK/`: the learner after each completed step (a policy directory);
-//! - `log.txt`: one line per task start/end and evaluation.
+//! - `log.txt`: one line per task start/end and evaluation;
+//! - `next-step.json`: switches and related tasks chosen in the workbench for the step to
+//!   train next (only while there are any).
 //!
 //! After each step the checkpoint is written first, then `metrics.json`;
 //! both atomically, so an interruption at any moment leaves a folder that
@@ -21,6 +23,8 @@ pub const METRICS_FILE: &str = "metrics.json";
 pub const RUN_FILE: &str = "run.toml";
 pub const LOG_FILE: &str = "log.txt";
 pub const CHECKPOINTS: &str = "checkpoints";
+/// The settings chosen in the workbench for the next step (see `engine::ChosenSettings`).
+pub const CHOSEN_FILE: &str = "next-step.json";
 
 /// The content of `metrics.json`: the session's results and their [`Summary`]
 /// (its fields stand at the top level of the file, after `eval_matrix`).

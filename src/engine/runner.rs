@@ -14,8 +14,8 @@
 use super::events::{Event, Observer};
 use super::learner::Learner;
 use super::run_config::{LearnerKind, RunConfig};
-use super::run_dir::{MetricsFile, RunDir, RUN_FILE};
-use super::session::{Session, StepOutcome};
+use super::run_dir::{MetricsFile, RunDir, CHOSEN_FILE, RUN_FILE};
+use super::session::{ChosenSettings, Session, StepOutcome};
 use super::toy_learner::ToyLearner;
 use crate::cl::TaskSpec;
 use crate::util::{replace_dir, write_atomic};
@@ -104,6 +104,14 @@ impl Runner {
                     n => runner.dir.checkpoint(n - 1, &prev.steps[n - 1].name),
                 };
                 runner.session.restore(prev.results(), &checkpoint).context("--resume")?;
+                let chosen = out.join(CHOSEN_FILE);
+                if chosen.exists() {
+                    let text =
+                        std::fs::read_to_string(&chosen).with_context(|| format!("reading {}", chosen.display()))?;
+                    let settings: ChosenSettings = serde_json::from_str(&text)
+                        .with_context(|| format!("{}: not the workbench's next-step settings", chosen.display()))?;
+                    runner.session.apply_chosen(settings).with_context(|| format!("{}", chosen.display()))?;
+                }
             }
             None => runner.write_start()?,
         }
@@ -164,8 +172,9 @@ impl Runner {
         )?
         .with_learned_tasks(&learned)?;
         if let Some(r) = &reference {
+            // Every task the reference file has (tasks added later find theirs too).
             let curves: BTreeMap<String, Vec<f64>> =
-                session.results().tasks.iter().filter_map(|t| Some((t.clone(), r.reference_curve(t)?))).collect();
+                r.tasks.iter().filter_map(|t| Some((t.clone(), r.reference_curve(t)?))).collect();
             session.set_reference(curves);
         }
         let lines = Arc::new(Mutex::new(dir.read_log()));
@@ -224,7 +233,8 @@ impl Runner {
     }
 
     /// Writes what is not yet on disk: tasks added to the sequence (into `run.toml`),
-    /// `metrics.json` and the log. A task in progress is not saved (a resume retrains it).
+    /// `metrics.json`, the settings chosen for the next step (`next-step.json`) and the log.
+    /// A task in progress is not saved (a resume retrains it from its start, as it started).
     pub fn save(&mut self) -> anyhow::Result<()> {
         let tasks = &self.session.sequence().tasks;
         if tasks.len() > self.written_tasks {
@@ -233,6 +243,14 @@ impl Runner {
             self.written_tasks = tasks.len();
         }
         self.dir.write_metrics(&self.metrics())?;
+        let chosen = self.dir.root.join(CHOSEN_FILE);
+        match self.session.chosen_settings() {
+            Some(c) => write_atomic(&chosen, serde_json::to_string_pretty(&c)?.as_bytes())?,
+            None if chosen.exists() => {
+                std::fs::remove_file(&chosen).with_context(|| format!("removing {}", chosen.display()))?
+            }
+            None => {}
+        }
         self.dir.write_log(&self.log_text())
     }
 

@@ -111,6 +111,25 @@ impl MaskReport {
         Ok(mask_report(&policy.tasks, &policy.networks.iter().collect::<Vec<_>>()))
     }
 
+    /// For task `task` in network `network`: per other task, the share of `task`'s selected
+    /// elements (over all the network's layers) that the other task selects too.
+    pub fn shared_with(&self, network: &str, task: &str) -> Vec<(String, f64)> {
+        let Some(net) = self.networks.iter().find(|n| n.name == network) else { return Vec::new() };
+        let mut shared: Vec<(String, usize)> = Vec::new();
+        let mut own = 0;
+        for l in &net.layers {
+            let Some(i) = l.per_task.iter().position(|p| p.task == task) else { continue };
+            own += l.per_task[i].selected;
+            for (j, p) in l.per_task.iter().enumerate().filter(|(j, _)| *j != i) {
+                match shared.iter_mut().find(|(n, _)| *n == p.task) {
+                    Some(e) => e.1 += l.overlap[i][j],
+                    None => shared.push((p.task.clone(), l.overlap[i][j])),
+                }
+            }
+        }
+        shared.into_iter().map(|(n, c)| (n, c as f64 / own.max(1) as f64)).collect()
+    }
+
     /// A readable table: one block per layer, one line per task.
     pub fn to_table(&self) -> String {
         use std::fmt::Write;

@@ -222,9 +222,9 @@ impl App {
         self.opened.as_ref().map(|o| &o.switches)
     }
 
-    /// Whether a task is training right now (not paused).
+    /// Whether a task is in progress (training or paused inside it): quitting loses its iterations.
     pub fn is_training(&self) -> bool {
-        self.live.is_some() && !self.paused && !self.stopped
+        self.live.is_some() && !self.stopped
     }
 
     pub(super) fn say(&mut self, message: impl Into<String>) {
@@ -293,7 +293,12 @@ impl App {
                 let commands = self.next.change(dir, self.opened.as_ref(), self.live.is_some());
                 commands.into_iter().for_each(|c| self.send(c));
             }
-            Action::BeginAddTask => self.next.input = Some(String::new()),
+            Action::BeginAddTask => {
+                // The line is typed in the Next task panel: show it.
+                self.show(Screen::NextTask);
+                self.focus = Panel::Controls;
+                self.next.input = Some(String::new());
+            }
             Action::Input(c) => self.next.type_char(c),
             Action::InputBackspace => self.next.backspace(),
             Action::InputClear => {
@@ -367,8 +372,8 @@ impl App {
     /// Asks the engine for the transfer preview of the next step's related tasks.
     pub(super) fn refresh_preview(&mut self) {
         let (related, init) = self.next.related();
-        if self.next.step.is_some() && !related.is_empty() && init != crate::cl::TransferInit::Scratch {
-            self.send(Command::PreviewTransfer(related));
+        if self.next.step.is_some() {
+            self.send(Command::PreviewTransfer { related, init });
         }
     }
 

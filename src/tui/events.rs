@@ -4,6 +4,7 @@
 //! element views, evaluations, previews, queued switches, failures.
 
 use super::app::{App, Live};
+use super::next_task::Preview;
 use super::worker::WorkerMsg;
 use crate::cl::TaskSpec;
 use crate::engine::{Event, StepRecord, TaskCurve};
@@ -16,6 +17,8 @@ impl App {
                 self.summary = Some(o.summary.clone());
                 let first_pending = o.base_tasks.len() + o.results.steps.len();
                 self.next.reset(&o, o.results.steps.len());
+                self.next.queued = o.queued.clone();
+                self.next.transfer = o.queued_transfer.clone();
                 self.opened = Some(*o);
                 // The last learned step: its curves and masks are the first thing to look at.
                 self.cursor = first_pending.saturating_sub(1);
@@ -106,7 +109,9 @@ impl App {
                 ));
                 self.last_eval = Some(evaluation);
             }
-            Event::TransferPreview { related, layers } => self.next.preview = Some((related, layers)),
+            Event::TransferPreview { step, related, init, lifted_from, repeat, layers } => {
+                self.next.preview = Some(Preview { step, related, init, lifted_from, repeat, layers });
+            }
             Event::TaskAppended { spec, .. } => self.append(spec),
             Event::SwitchesQueued { overrides } => self.next.queued = self.next.queued.merged(&overrides),
             Event::TransferQueued { related, init } => {
@@ -141,5 +146,11 @@ impl App {
             }
             o.sequence.tasks.push(spec);
         }
+        // With every earlier step learned, the added one is the next: its controls now act on it.
+        if let Some(o) = &self.opened {
+            let next = o.results.steps.len() + usize::from(self.live.is_some());
+            self.next.reset(o, next);
+        }
+        self.refresh_preview();
     }
 }

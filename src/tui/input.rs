@@ -17,7 +17,8 @@ pub fn event_action(app: &App, event: &Event) -> Option<Action> {
 /// The action of one key press.
 pub fn key_action(app: &App, key: &KeyEvent) -> Option<Action> {
     if key.modifiers.contains(KeyModifiers::CONTROL) && key.code == KeyCode::Char('c') {
-        return Some(Action::Quit);
+        // A second Ctrl-C answers the quit question: a forced quit.
+        return Some(if app.confirm_quit { Action::ConfirmQuit(true) } else { Action::Quit });
     }
     if app.help {
         return Some(Action::ToggleHelp);

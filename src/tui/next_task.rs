@@ -15,6 +15,19 @@ use std::str::FromStr;
 pub const SWITCH_ROWS: [&str; 5] = ["reinit", "entropy", "lambda", "capacity c", "private share p"];
 const MODE_ROW: usize = SWITCH_ROWS.len();
 
+/// The engine's transfer preview for one choice of related tasks and mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Preview {
+    pub step: usize,
+    pub related: Vec<String>,
+    pub init: TransferInit,
+    /// The tasks whose masks get the bonus (drawn ones for `random`).
+    pub lifted_from: Vec<String>,
+    /// The step repeats a learned task: no bonus.
+    pub repeat: bool,
+    pub layers: Vec<LayerLift>,
+}
+
 /// The composer's state.
 #[derive(Debug, Clone, Default)]
 pub struct NextTask {
@@ -27,7 +40,7 @@ pub struct NextTask {
     pub transfer: Option<(Vec<String>, TransferInit)>,
     /// The learned tasks a next task may name as related.
     pub learned: Vec<String>,
-    pub preview: Option<(Vec<String>, Vec<LayerLift>)>,
+    pub preview: Option<Preview>,
     /// A task string being typed.
     pub input: Option<String>,
     pub input_error: Option<String>,

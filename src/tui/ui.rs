@@ -145,7 +145,7 @@ fn confirm_quit(f: &mut Frame, area: Rect, app: &App) {
         format!("{} (step {}) is at iteration {}/{}. ", l.record.name, l.record.step, l.iteration, l.record.iterations)
     });
     let text = format!(
-        "{what}Quit now? The finished steps are saved; this task restarts from its beginning when the run is reopened.\n\ny quit   n keep training"
+        "{what}Quit now? The finished steps are saved; this step restarts from its beginning (with the settings it has now) when the run is reopened.\n\ny quit   n go on"
     );
     let rect = centered(area, 60, 7);
     f.render_widget(Clear, rect);

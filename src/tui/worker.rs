@@ -5,7 +5,7 @@
 //! trains until the user starts a step. A second thread steps the robot
 //! viewer of one task for the robot panel, at real time.
 
-use crate::cl::{Sequence, Switches};
+use crate::cl::{Sequence, SwitchOverrides, Switches, TransferInit};
 use crate::engine::{ChannelObserver, CommandSender, Event, OpenMode, Runner, SessionResults, Summary};
 use crate::nn::MaskReport;
 use crate::rl::{RobotFrame, RobotViewer};
@@ -43,6 +43,9 @@ pub struct Opened {
     pub summary: Summary,
     /// The policy that recalls every learned task (the robot view runs it).
     pub last_checkpoint: Option<PathBuf>,
+    /// Switch changes and transfer queued for the next step (kept in the folder across reopens).
+    pub queued: SwitchOverrides,
+    pub queued_transfer: Option<(Vec<String>, TransferInit)>,
 }
 
 /// A message from the worker thread.
@@ -71,15 +74,22 @@ pub struct Worker {
     pub messages: Receiver<WorkerMsg>,
     sender: Sender<WorkerMsg>,
     commands: Arc<std::sync::Mutex<Option<CommandSender>>>,
+    /// Set by [`Worker::shutdown`]: a run still opening stops as soon as it is open.
+    stop: Arc<AtomicBool>,
     handle: Option<JoinHandle<()>>,
-    robot: Option<(Arc<AtomicBool>, JoinHandle<()>)>,
+    /// The robot view's stop flag.
+    robot: Option<Arc<AtomicBool>>,
+    /// Robot threads told to stop (joined at shutdown, not on the UI thread's way).
+    stopping: Vec<JoinHandle<()>>,
+    robot_handle: Option<JoinHandle<()>>,
 }
 
 fn open(spec: &OpenSpec) -> anyhow::Result<(Runner, String)> {
     let dir = &spec.run_dir;
     let shown = dir.display();
     if has_run(dir) {
-        let config = spec.config.clone().unwrap_or_else(|| dir.join(crate::engine::RUN_FILE));
+        // The folder's own run file: it has the tasks added in the workbench, which `config` lacks.
+        let config = dir.join(crate::engine::RUN_FILE);
         return Ok((Runner::open(&config, dir, OpenMode::Resume, false)?, format!("reopened {shown}")));
     }
     let config = spec
@@ -112,6 +122,8 @@ fn opened(runner: &Runner, origin: String) -> Opened {
         report: session.learner().mask_report(&results.tasks),
         summary: metrics.summary,
         last_checkpoint: runner.last_checkpoint().or_else(|| runner.base_policy()),
+        queued: session.queued_switches().clone(),
+        queued_transfer: session.queued_transfer().cloned(),
         sequence,
         results,
     }
@@ -122,7 +134,8 @@ impl Worker {
     pub fn spawn(spec: OpenSpec) -> Self {
         let (sender, messages) = channel();
         let commands = Arc::new(std::sync::Mutex::new(None));
-        let (tx, slot) = (sender.clone(), commands.clone());
+        let stop = Arc::new(AtomicBool::new(false));
+        let (tx, slot, stopped) = (sender.clone(), commands.clone(), stop.clone());
         let handle = std::thread::spawn(move || {
             let (mut runner, origin) = match open(&spec) {
                 Ok(r) => r,
@@ -143,14 +156,30 @@ impl Worker {
                 let tx = tx.clone();
                 std::thread::spawn(move || events.iter().for_each(|e| drop(tx.send(WorkerMsg::Event(Box::new(e))))))
             };
-            if let Err(e) = runner.serve() {
-                let _ = tx.send(WorkerMsg::Failed(format!("{e:#}")));
+            if stopped.load(Ordering::SeqCst) {
+                runner.session_mut().stop();
             }
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| runner.serve()));
+            // Dropping the runner closes the event channel: every event is forwarded before the end.
             drop(runner);
             let _ = forward.join();
+            match outcome {
+                Ok(Ok(())) => {}
+                Ok(Err(e)) => drop(tx.send(WorkerMsg::Failed(format!("{e:#}")))),
+                Err(_) => drop(tx.send(WorkerMsg::Failed("the session thread panicked (see stderr)".into()))),
+            }
             let _ = tx.send(WorkerMsg::Exited);
         });
-        Self { messages, sender, commands, handle: Some(handle), robot: None }
+        Self {
+            messages,
+            sender,
+            commands,
+            stop,
+            handle: Some(handle),
+            robot: None,
+            stopping: Vec::new(),
+            robot_handle: None,
+        }
     }
 
     /// Sends a command to the session (dropped before the run is open).
@@ -163,10 +192,17 @@ impl Worker {
     /// Stops the session and waits for its thread (its results are written by then).
     pub fn shutdown(&mut self) {
         self.stop_robot();
+        self.stop.store(true, Ordering::SeqCst);
         self.send(crate::engine::Command::Stop);
         if let Some(h) = self.handle.take() {
+            // A run still opening sees the flag once open; one serving gets the command.
+            while !h.is_finished() {
+                self.send(crate::engine::Command::Stop);
+                std::thread::sleep(Duration::from_millis(20));
+            }
             let _ = h.join();
         }
+        self.stopping.drain(..).for_each(|h| drop(h.join()));
     }
 
     /// Runs task `task` of the policy `policy` in the robot view (replacing any running one).
@@ -175,6 +211,11 @@ impl Worker {
         let stop = Arc::new(AtomicBool::new(false));
         let (flag, tx) = (stop.clone(), self.sender.clone());
         let handle = std::thread::spawn(move || {
+            // A checkpoint announced by the engine may still be being written: wait a little for it.
+            let deadline = Instant::now() + Duration::from_secs(10);
+            while !policy.exists() && Instant::now() < deadline && !flag.load(Ordering::Relaxed) {
+                std::thread::sleep(Duration::from_millis(100));
+            }
             let mut viewer = match RobotViewer::new(&policy, &task, 1, None) {
                 Ok(v) => v,
                 Err(e) => {
@@ -204,15 +245,17 @@ impl Worker {
                 }
             }
         });
-        self.robot = Some((stop, handle));
+        self.robot = Some(stop);
+        self.robot_handle = Some(handle);
     }
 
-    /// Stops the robot view's thread.
+    /// Tells the robot view's thread to stop (without waiting for it: the UI stays responsive).
     pub fn stop_robot(&mut self) {
-        if let Some((stop, handle)) = self.robot.take() {
+        if let Some(stop) = self.robot.take() {
             stop.store(true, Ordering::Relaxed);
-            let _ = handle.join();
         }
+        self.stopping.extend(self.robot_handle.take());
+        self.stopping.retain(|h| !h.is_finished());
     }
 }
 

@@ -40,17 +40,16 @@ pub fn open_shipped(dir: &Path, size: (u16, u16)) -> (App, Worker) {
         config: Some(root().join("scenes/sequence-a1.toml")),
         continues: Some(root().join("policies/sequence-a1")),
     };
-    std::env::set_current_dir(root()).unwrap();
     open(spec, size)
 }
 
-/// Applies `action`, sends what it queued, and applies the worker's answers until `until` holds (at most 120 s).
+/// Applies `action`, sends what it queued, and applies the worker's answers until `until` holds (at most 20 s).
 pub fn act(app: &mut App, worker: &mut Worker, action: Action, until: impl Fn(&App) -> bool) {
     app.update(action);
     pump(app, worker, until);
 }
 
-/// Sends what the app queued and applies the worker's messages until `until` holds (at most 120 s).
+/// Sends what the app queued and applies the worker's messages until `until` holds (at most 20 s).
 pub fn pump(app: &mut App, worker: &mut Worker, until: impl Fn(&App) -> bool) {
     let start = Instant::now();
     loop {
@@ -84,6 +83,23 @@ pub fn drain(app: &mut App, worker: &mut Worker) {
 pub fn screen(app: &App, width: u16, height: u16, hide: &Path) -> String {
     let mut terminal = Terminal::new(TestBackend::new(width, height)).unwrap();
     terminal.draw(|f| ui::draw(f, app)).unwrap();
+    text(&terminal, width, height, hide)
+}
+
+/// One panel alone, drawn by `draw` over the whole `width` x `height` area (unfocused).
+pub fn panel(
+    app: &App,
+    width: u16,
+    height: u16,
+    hide: &Path,
+    draw: fn(&mut ratatui::Frame, ratatui::layout::Rect, &App, bool),
+) -> String {
+    let mut terminal = Terminal::new(TestBackend::new(width, height)).unwrap();
+    terminal.draw(|f| draw(f, f.area(), app, false)).unwrap();
+    text(&terminal, width, height, hide)
+}
+
+fn text(terminal: &Terminal<TestBackend>, width: u16, height: u16, hide: &Path) -> String {
     let buffer = terminal.backend().buffer();
     let mut text = String::new();
     for y in 0..height {

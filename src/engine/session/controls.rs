@@ -10,7 +10,21 @@ use super::Session;
 use crate::cl::{KnownBefore, SwitchOverrides, Switches, TaskSpec, TransferInit};
 use crate::engine::events::{Command, Event};
 use crate::nn::TaskId;
+use crate::util::{derive_seed, Stream};
 use anyhow::Context;
+use serde::{Deserialize, Serialize};
+
+/// What a UI chose for the step to train next, beyond its run-file entry: kept in the run
+/// folder, so a step interrupted (or not yet started) is trained as chosen after a reopen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChosenSettings {
+    /// The step they are for.
+    pub step: usize,
+    /// Switch changes.
+    pub switches: SwitchOverrides,
+    /// Related tasks and mode replacing the entry's.
+    pub transfer: Option<(Vec<String>, TransferInit)>,
+}
 
 impl Session {
     /// The switches the next task to start will use (its sequence entry and queued changes applied).
@@ -76,6 +90,53 @@ impl Session {
         self.in_progress.as_ref().map_or((self.completed_steps(), 0), |p| (p.record.step, p.iteration))
     }
 
+    /// Switch changes queued for the next task to start.
+    pub fn queued_switches(&self) -> &SwitchOverrides {
+        &self.queued
+    }
+
+    /// Related tasks and mode queued for the next task to start.
+    pub fn queued_transfer(&self) -> Option<&(Vec<String>, TransferInit)> {
+        self.queued_transfer.as_ref()
+    }
+
+    /// The settings of the step in progress (as it started), or the changes queued for the
+    /// next one; None when the next step is exactly its run-file entry.
+    pub fn chosen_settings(&self) -> Option<ChosenSettings> {
+        if let Some(p) = &self.in_progress {
+            let s = &p.record.switches;
+            let switches = SwitchOverrides {
+                reinit: Some(s.reinit),
+                entropy: Some(s.entropy),
+                lambda: Some(s.lambda),
+                capacity: Some(s.capacity),
+                private_share: Some(s.private_share),
+            };
+            // The drawn related tasks (random mode already resolved) give the same start as related.
+            let names = p.record.related.iter().map(|t| self.results.tasks[*t].clone()).collect();
+            let transfer = (!p.record.repeat).then_some((names, TransferInit::Related));
+            return Some(ChosenSettings { step: p.record.step, switches, transfer });
+        }
+        let untouched = self.queued == SwitchOverrides::default() && self.queued_transfer.is_none();
+        (!untouched).then(|| ChosenSettings {
+            step: self.completed_steps(),
+            switches: self.queued.clone(),
+            transfer: self.queued_transfer.clone(),
+        })
+    }
+
+    /// Queues `chosen` again if it is for the next step to start (else it is stale and ignored).
+    pub fn apply_chosen(&mut self, chosen: ChosenSettings) -> anyhow::Result<()> {
+        if chosen.step != self.completed_steps() || self.in_progress.is_some() {
+            return Ok(());
+        }
+        self.set_next_switches(chosen.switches)?;
+        if let Some((related, init)) = chosen.transfer {
+            self.set_next_transfer(related, init)?;
+        }
+        Ok(())
+    }
+
     /// Stops: nothing more trains; the task in progress is abandoned.
     pub fn stop(&mut self) {
         if !self.stopped {
@@ -138,11 +199,23 @@ impl Session {
         Ok(())
     }
 
-    /// Reports how many elements per layer the transfer bonus of `related` would lift.
-    pub fn preview_transfer(&mut self, related: Vec<String>) -> anyhow::Result<()> {
-        let ids: Vec<TaskId> = related.iter().map(|n| self.task_id(n)).collect::<anyhow::Result<_>>()?;
-        let layers = self.learner.transfer_lift(&ids);
-        self.emit(Event::TransferPreview { related, layers });
+    /// Reports how many elements per layer the transfer bonus would lift for the next step to
+    /// start with `related` and `init`, resolved as the step will resolve them (`random` draws
+    /// with the step's seed from the tasks learned by then; a repeat gets no bonus).
+    pub fn preview_transfer(&mut self, related: Vec<String>, init: TransferInit) -> anyhow::Result<()> {
+        let step = self.completed_steps() + usize::from(self.in_progress.is_some());
+        let spec = self.sequence.tasks.get(step).context("no step left to start: add a task first")?;
+        let task = self.task_id(&spec.name)?;
+        let mut learned = self.finished.clone();
+        if let Some(p) = &self.in_progress {
+            learned[p.record.task] = true;
+        }
+        let repeat = learned[task];
+        let seed = derive_seed(self.seed, Stream::SequenceStep(step));
+        let ids = if repeat { Vec::new() } else { self.resolve_related(&related, init, task, seed, &learned)? };
+        let layers = if ids.is_empty() { Vec::new() } else { self.learner.transfer_lift(&ids) };
+        let lifted_from = ids.iter().map(|t| self.results.tasks[*t].clone()).collect();
+        self.emit(Event::TransferPreview { step, related, init, lifted_from, repeat, layers });
         Ok(())
     }
 
@@ -192,7 +265,7 @@ impl Session {
             Command::SetNextTransfer { related, init } => self.set_next_transfer(related, init),
             Command::Evaluate(name) => self.evaluate_now(&name),
             Command::WatchMasks(name) => self.watch_masks(&name),
-            Command::PreviewTransfer(related) => self.preview_transfer(related),
+            Command::PreviewTransfer { related, init } => self.preview_transfer(related, init),
             Command::AppendTask(spec) => self.append_task(spec),
         };
         if let Err(e) = result {

@@ -16,6 +16,7 @@
 //! never stopped.
 
 mod controls;
+pub use controls::ChosenSettings;
 mod restore;
 
 use super::events::{Command, CommandSender, Event, Observer};
@@ -267,7 +268,8 @@ impl Session {
         let repeat = self.finished[task];
         let seed = derive_seed(self.seed, Stream::SequenceStep(step));
         let (related_names, init) = self.queued_transfer.take().unwrap_or((spec.related.clone(), spec.init));
-        let related = if repeat { Vec::new() } else { self.resolve_related(&related_names, init, task, seed)? };
+        let related =
+            if repeat { Vec::new() } else { self.resolve_related(&related_names, init, task, seed, &self.finished)? };
         let start = TaskStart {
             step,
             task,
@@ -304,12 +306,14 @@ impl Session {
     }
 
     /// Task ids for the transfer initialisation (METHOD.md 2.6).
+    /// `learned[t]`: task t is learned by the time the step starts (the pool `random` draws from).
     fn resolve_related(
         &self,
         names: &[String],
         init: TransferInit,
         task: TaskId,
         seed: u64,
+        learned: &[bool],
     ) -> anyhow::Result<Vec<TaskId>> {
         let id = |n: &String| {
             self.results
@@ -323,8 +327,7 @@ impl Session {
             TransferInit::Scratch => Ok(Vec::new()),
             TransferInit::Related => Ok(named),
             TransferInit::Random => {
-                let learned: Vec<TaskId> =
-                    (0..self.finished.len()).filter(|&t| self.finished[t] && t != task).collect();
+                let learned: Vec<TaskId> = (0..learned.len()).filter(|&t| learned[t] && t != task).collect();
                 let others: Vec<TaskId> = learned.iter().copied().filter(|t| !named.contains(t)).collect();
                 let pool = if others.len() >= named.len() { others } else { learned };
                 let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(seed, Stream::RandomRelated));

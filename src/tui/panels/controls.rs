@@ -83,24 +83,39 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
     if let Some(e) = &next.input_error {
         lines.push(Line::styled(format!("  {e}"), Style::new().fg(Color::Red)));
     }
+    let current = next.step.as_ref().map(|(step, _)| *step);
     match &next.preview {
-        Some((names, layers)) if *names == related => {
+        Some(p) if p.related == related && p.init == init && Some(p.step) == current => {
             lines.push(Line::raw(""));
-            lines.push(Line::styled("  the transfer bonus lifts, per layer:", Style::new().fg(Color::Gray)));
-            let width = area.width.saturating_sub(4) as usize;
-            let mut line = String::from("  ");
-            for l in layers {
-                let part =
-                    format!("{} {} ({:.0}%)   ", l.layer, l.lifted, 100.0 * l.lifted as f64 / l.total.max(1) as f64);
-                if line.len() + part.len() > width {
-                    lines.push(Line::raw(std::mem::replace(&mut line, String::from("  "))));
+            if p.repeat {
+                lines.push(Line::raw(
+                    "  a repeat of a learned task: no transfer bonus (its private weights and bias train)",
+                ));
+            } else if p.lifted_from.is_empty() {
+                lines.push(Line::raw("  no bonus: the soft scores start from their initial draw"));
+            } else {
+                lines.push(Line::styled(
+                    format!("  the bonus on the masks of {} lifts, per layer:", p.lifted_from.join(", ")),
+                    Style::new().fg(Color::Gray),
+                ));
+                let width = area.width.saturating_sub(4) as usize;
+                let mut line = String::from("  ");
+                for l in &p.layers {
+                    let part = format!(
+                        "{} {} ({:.0}%)   ",
+                        l.layer,
+                        l.lifted,
+                        100.0 * l.lifted as f64 / l.total.max(1) as f64
+                    );
+                    if line.len() + part.len() > width {
+                        lines.push(Line::raw(std::mem::replace(&mut line, String::from("  "))));
+                    }
+                    line.push_str(&part);
                 }
-                line.push_str(&part);
+                lines.push(Line::raw(line));
             }
-            lines.push(Line::raw(line));
         }
-        _ if init == crate::cl::TransferInit::Scratch => lines.push(Line::raw("  scratch: no bonus")),
-        _ => lines.push(Line::styled("  toggle a related task to preview its bonus", Style::new().fg(Color::Gray))),
+        _ => lines.push(Line::styled("  (the preview comes from the engine)", Style::new().fg(Color::Gray))),
     }
     f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }).block(block("Next task", focused)), area);
 }

@@ -136,24 +136,9 @@ fn legend() -> [Line<'static>; 2] {
 
 /// The share of the task's selected elements (in this network) that each other task selects too.
 fn overlap_line(app: &App, network: &str, task: &str) -> Line<'static> {
-    let Some(report) = &app.report else { return Line::raw("") };
-    let Some(net) = report.networks.iter().find(|n| n.name == network) else { return Line::raw("") };
-    let mut shared: Vec<(String, usize)> = Vec::new();
-    let mut own = 0;
-    for l in &net.layers {
-        let Some(i) = l.per_task.iter().position(|p| p.task == task) else { continue };
-        own += l.per_task[i].selected;
-        for (j, p) in l.per_task.iter().enumerate().filter(|(j, _)| *j != i) {
-            match shared.iter_mut().find(|(n, _)| *n == p.task) {
-                Some(e) => e.1 += l.overlap[i][j],
-                None => shared.push((p.task.clone(), l.overlap[i][j])),
-            }
-        }
-    }
-    let parts: Vec<String> = shared
-        .iter()
-        .map(|(n, c)| format!("{} {:.1}%", super::short_task(n), 100.0 * *c as f64 / own.max(1) as f64))
-        .collect();
+    let shared = app.report.as_ref().map(|r| r.shared_with(network, task)).unwrap_or_default();
+    let parts: Vec<String> =
+        shared.iter().map(|(n, share)| format!("{} {:.1}%", super::short_task(n), 100.0 * share)).collect();
     Line::raw(format!("shared with: {}", if parts.is_empty() { "-".to_string() } else { parts.join("  ") }))
 }
 
