@@ -75,3 +75,29 @@ fn a_sequence_starts_from_a_base_policy_and_keeps_its_task() {
     assert_eq!(base_evals.len(), 2);
     assert_eq!(base_evals[0], base_evals[1], "the base task is recalled bit for bit");
 }
+
+#[test]
+fn evaluating_a_learned_task_in_the_middle_of_a_step_changes_no_number_of_the_run() {
+    use quadcl::engine::{ChannelObserver, Command, Event, OpenMode, Runner, StepOutcome};
+    let tmp = tempfile::tempdir().unwrap();
+    let mut plain = Runner::open(&smoke(), &tmp.path().join("plain"), OpenMode::New, false).unwrap();
+    assert_eq!(plain.train(None).unwrap(), StepOutcome::SequenceDone);
+
+    let mut probed = Runner::open(&smoke(), &tmp.path().join("probed"), OpenMode::New, false).unwrap();
+    let (tx, events) = std::sync::mpsc::channel();
+    probed.session_mut().add_observer(Box::new(ChannelObserver(tx)));
+    probed.train(Some(1)).unwrap();
+    probed.session_mut().step_iteration().unwrap();
+    probed.session().command_sender().send(Command::Evaluate("crash:FL".into())).unwrap();
+    assert_eq!(probed.train(None).unwrap(), StepOutcome::SequenceDone);
+    let now = events.try_iter().find_map(|e| match e {
+        Event::EvaluatedNow { evaluation } => Some(evaluation),
+        _ => None,
+    });
+    let now = now.expect("evaluated in the middle of step 1");
+    let (a, b) = (plain.metrics(), probed.metrics());
+    assert_eq!(a.curves, b.curves);
+    assert_eq!(a.eval_matrix, b.eval_matrix);
+    assert_eq!(a.evaluations, b.evaluations);
+    assert_eq!(&now, b.evaluations[1].iter().find(|e| e.report.task == "crash:FL").unwrap(), "the same recall");
+}

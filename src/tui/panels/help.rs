@@ -14,7 +14,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("↑ ↓ / k j", "select a step (a row of the Next task panel when it has the focus)"),
     ("space", "start the next step / pause / resume training"),
     ("r", "run through the rest of the sequence / stop after each step (the default)"),
-    ("e", "evaluate the selected task now (between tasks)"),
+    ("e", "evaluate the selected learned task now (also while a step trains)"),
     ("S", "save metrics.json and the log now"),
     ("m", "curves: next metric (performance, return, tracking errors, fall rate)"),
     ("s  + -", "curves: smoothing on/off, stronger / weaker (debiased EMA)"),
