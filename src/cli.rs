@@ -28,6 +28,8 @@ pub enum Command {
     Gait(crate::cmd::gait::GaitArgs),
     /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
     Run(crate::cmd::run::RunArgs),
+    /// Record a policy's episodes on a task into an .mcap file (Foxglove): frames, link shapes, joints, rewards, contacts.
+    Record(crate::cmd::record::RecordArgs),
     /// The workbench (also what `quadcl` alone opens): step through a sequence, watch training, masks, the robot.
     Tui(crate::cmd::tui::TuiArgs),
     /// Sim-to-real fine-tuning of one learned task on a shifted environment (its private parameters only).
@@ -45,6 +47,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Run(args)) => crate::cmd::run::run(args),
         Some(Command::Finetune(args)) => crate::cmd::finetune::run(args),
         Some(Command::Tui(args)) => crate::cmd::tui::run(args),
+        Some(Command::Record(args)) => crate::cmd::record::run(args),
         None => crate::cmd::tui::run(crate::cmd::tui::TuiArgs::default()),
     }
 }

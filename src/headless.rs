@@ -36,14 +36,17 @@ pub struct RunOptions {
     pub progress: bool,
     /// Stop after this many more completed tasks (the rest can be `resume`d later).
     pub stop_after: Option<usize>,
+    /// Record one evaluation episode of every learned task after each task (MCAP, `DIR/episodes/`).
+    pub record: bool,
 }
 
 /// Runs (or, with `resume`, continues) the run file `config` into `out`.
 /// Every check (config, existing results, checkpoint) happens before anything is written.
 pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<MetricsFile> {
-    let RunOptions { resume, progress, stop_after } = options;
+    let RunOptions { resume, progress, stop_after, record } = options;
     let mode = if resume { OpenMode::Resume } else { OpenMode::New };
     let mut runner = Runner::open(config, out, mode, !progress)?;
+    runner.record_episodes(record)?;
     let session = runner.session();
     let sequence = session.sequence();
     let total: usize = (0..sequence.tasks.len()).map(|i| sequence.iterations_of(i)).sum();

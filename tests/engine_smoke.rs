@@ -101,3 +101,33 @@ fn evaluating_a_learned_task_in_the_middle_of_a_step_changes_no_number_of_the_ru
     assert_eq!(a.evaluations, b.evaluations);
     assert_eq!(&now, b.evaluations[1].iter().find(|e| e.report.task == "crash:FL").unwrap(), "the same recall");
 }
+
+#[test]
+fn a_run_with_record_keeps_one_mcap_episode_of_every_learned_task_after_each_step() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("rec");
+    run(&smoke(), &out, RunOptions { record: true, ..Default::default() }).unwrap();
+    for (step, expected) in [
+        ("step-00-crash_FL", vec!["crash_FL.mcap"]),
+        ("step-02-noise_FR", vec!["crash_FL.mcap", "invert_RR.mcap", "noise_FR.mcap"]),
+    ] {
+        let folder = out.join("episodes").join(step);
+        let mut names: Vec<String> = std::fs::read_dir(&folder)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, expected, "{step}");
+        let bytes = std::fs::read(folder.join(&expected[0])).unwrap();
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        let stats = summary.stats.unwrap();
+        assert!(stats.message_count > 6, "an episode's messages");
+    }
+    let toy = tmp.path().join("toy.toml");
+    std::fs::write(&toy, "[run]\nlearner = \"toy\"\n[[task]]\nname = \"crash:FL\"\n").unwrap();
+    let err = format!(
+        "{:#}",
+        run(&toy, &tmp.path().join("t"), RunOptions { record: true, ..Default::default() }).unwrap_err()
+    );
+    assert!(err.contains("--record") && err.contains("toy"), "{err}");
+}

@@ -3,4 +3,5 @@
 
 pub mod env;
 pub mod nn;
+pub mod record;
 pub mod tui;

@@ -5,6 +5,7 @@ pub mod eval;
 pub mod finetune;
 pub mod gait;
 pub mod masks;
+pub mod record;
 pub mod run;
 pub mod train;
 pub mod tui;

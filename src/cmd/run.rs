@@ -19,6 +19,9 @@ pub struct RunArgs {
     /// Stop after this many completed tasks (continue later with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
+    /// After each task, record one evaluation episode of every learned task into DIR/episodes/ (`mcap`: Foxglove).
+    #[arg(long, value_parser = ["mcap"])]
+    pub record: Option<String>,
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
@@ -29,6 +32,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             resume: args.resume,
             progress: std::io::stderr().is_terminal(),
             stop_after: args.stop_after,
+            record: args.record.is_some(),
         },
     )?;
     let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));

@@ -4,6 +4,8 @@
 //! - `metrics.json`: the measures and everything needed to resume (see [`MetricsFile`]);
 //! - `checkpoints/step-NN-TASK/`: the learner after each completed step (a policy directory);
 //! - `log.txt`: one line per task start/end and evaluation;
+//! - `episodes/step-NN-TASK/T.mcap`: with `--record mcap`, an evaluation episode of every
+//!   learned task T after the step;
 //! - `next-step.json`: switches and related tasks chosen in the workbench for the step to
 //!   train next (only while there are any).
 //!
@@ -23,6 +25,8 @@ pub const METRICS_FILE: &str = "metrics.json";
 pub const RUN_FILE: &str = "run.toml";
 pub const LOG_FILE: &str = "log.txt";
 pub const CHECKPOINTS: &str = "checkpoints";
+/// One recorded evaluation episode per learned task after each step (`quadcl run --record mcap`).
+pub const EPISODES: &str = "episodes";
 /// The settings chosen in the workbench for the next step (see `engine::ChosenSettings`).
 pub const CHOSEN_FILE: &str = "next-step.json";
 

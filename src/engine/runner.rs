@@ -10,14 +10,17 @@
 //! `run_dir`). Tasks added to the sequence on the way are appended to
 //! `run.toml`, so a reopened folder has them. [`Runner::train`] runs headless
 //! to the end; [`Runner::serve`] waits for commands (a UI's worker thread).
+//! With [`Runner::record_episodes`], each step also records one evaluation
+//! episode of every learned task into `episodes/` (MCAP, for Foxglove).
 
 use super::events::{Event, Observer};
 use super::learner::Learner;
 use super::run_config::{LearnerKind, RunConfig};
-use super::run_dir::{MetricsFile, RunDir, CHOSEN_FILE, RUN_FILE};
+use super::run_dir::{MetricsFile, RunDir, CHOSEN_FILE, EPISODES, RUN_FILE};
 use super::session::{ChosenSettings, Session, StepOutcome};
 use super::toy_learner::ToyLearner;
 use crate::cl::TaskSpec;
+use crate::record::{record_episodes, RecordOptions};
 use crate::util::{replace_dir, write_atomic};
 use anyhow::Context;
 use std::collections::BTreeMap;
@@ -61,6 +64,11 @@ pub struct Runner {
     reference: Option<MetricsFile>,
     keep_last_checkpoint_only: bool,
     base_policy: Option<PathBuf>,
+    /// Record one evaluation episode of every learned task after each step (`--record mcap`).
+    record: bool,
+    learner: LearnerKind,
+    seed: u64,
+    episode_s: f64,
     lines: Arc<Mutex<String>>,
 }
 
@@ -187,6 +195,10 @@ impl Runner {
             reference,
             keep_last_checkpoint_only: cfg.run.keep_last_checkpoint_only,
             base_policy: cfg.run.base_policy.clone(),
+            record: false,
+            learner: cfg.run.learner,
+            seed: cfg.config.seed,
+            episode_s: f64::from(cfg.config.env.episode_s),
             lines,
         })
     }
@@ -215,6 +227,39 @@ impl Runner {
     pub fn last_checkpoint(&self) -> Option<PathBuf> {
         let steps = &self.session.results().steps;
         steps.last().map(|s| self.dir.checkpoint(s.step, &s.name))
+    }
+
+    /// After each step, record one evaluation episode of every learned task as MCAP into
+    /// `episodes/step-NN-TASK/TASK.mcap` (the PPO learner only: its checkpoints are policies).
+    pub fn record_episodes(&mut self, on: bool) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            !on || self.learner == LearnerKind::Ppo,
+            "--record needs the PPO learner: a [run] learner = \"toy\" run has no robot to record"
+        );
+        self.record = on;
+        Ok(())
+    }
+
+    fn record_step(&self, step: usize) -> anyhow::Result<()> {
+        let results = self.session.results();
+        let checkpoint = self.dir.checkpoint(step, &results.steps[step].name);
+        let folder = self.dir.root.join(EPISODES).join(checkpoint.file_name().unwrap_or_default());
+        std::fs::create_dir_all(&folder).with_context(|| format!("creating {}", folder.display()))?;
+        let row = &results.eval_matrix.rows[step];
+        for (t, name) in results.tasks.iter().enumerate().filter(|(t, _)| row.get(*t).copied().flatten().is_some()) {
+            let safe: String =
+                name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+            let options = RecordOptions {
+                seconds: self.episode_s,
+                episodes: Some(1),
+                command: None,
+                seed: crate::util::derive_seed(self.seed, crate::util::Stream::SequenceEval(t)),
+                force: true,
+            };
+            record_episodes(&checkpoint, name, &folder.join(format!("{safe}.mcap")), &options)
+                .with_context(|| format!("recording {name} after step {step}"))?;
+        }
+        Ok(())
     }
 
     /// The run file's base policy (`[run] base_policy`), if any.
@@ -261,6 +306,9 @@ impl Runner {
         let name = &results.steps[step].name;
         self.dir.write_checkpoint(step, name, self.session.learner(), &results.tasks)?;
         self.save()?;
+        if self.record {
+            self.record_step(step)?;
+        }
         let results = self.session.results();
         if self.keep_last_checkpoint_only && step > 0 {
             let previous = self.dir.checkpoint(step - 1, &results.steps[step - 1].name);

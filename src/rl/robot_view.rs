@@ -100,6 +100,28 @@ impl RobotViewer {
         self.env.task()
     }
 
+    /// Attaches a step observer (a recorder) to the viewer's env; it hears the current state
+    /// as the start of the episode, then every step.
+    pub fn observe(&mut self, observer: Box<dyn crate::sim::StepObserver>) {
+        self.env.observe(observer);
+        self.env.announce();
+    }
+
+    /// Detaches the observer, to finish it.
+    pub fn take_observer(&mut self) -> Option<Box<dyn crate::sim::StepObserver>> {
+        self.env.take_observer()
+    }
+
+    /// The viewer's env (its robot, its task).
+    pub fn env(&self) -> &crate::sim::LocomotionEnv {
+        &self.env
+    }
+
+    /// Episodes finished so far.
+    pub fn episodes(&self) -> u64 {
+        self.episode
+    }
+
     /// Seconds per control step.
     pub fn policy_dt(&self) -> f32 {
         self.dt

@@ -10,8 +10,10 @@
 //! observations. The env does not reset itself: the caller (or `VecEnv`)
 //! calls [`LocomotionEnv::reset_episode`] once a step says it is done.
 
+use super::env_setup::{build_sim, default_pose, first_non_finite, soft_limit, uniform};
 use super::episode::{EpisodeStats, Step};
 use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
+use super::observe::{StepInfo, StepObserver};
 use super::physics::{PhysicsParams, RawState, RobotSim};
 use super::reward::{self, RewardInput};
 use super::robot::RobotModel;
@@ -50,6 +52,9 @@ pub struct LocomotionEnv {
     priv_obs: [f32; PRIV_OBS_DIM],
     history: Vec<f32>,
     episode: EpisodeStats,
+    /// Simulated seconds since the env was built.
+    sim_time: f64,
+    observer: Option<Box<dyn StepObserver>>,
 }
 
 impl LocomotionEnv {
@@ -94,6 +99,8 @@ impl LocomotionEnv {
             priv_obs: [0.0; PRIV_OBS_DIM],
             history: vec![0.0; HISTORY_LEN * OBS_DIM],
             episode: EpisodeStats::default(),
+            sim_time: 0.0,
+            observer: None,
         };
         env.reset(0)?;
         Ok(env)
@@ -132,7 +139,59 @@ impl LocomotionEnv {
         for k in 0..HISTORY_LEN {
             self.history[k * OBS_DIM..(k + 1) * OBS_DIM].copy_from_slice(&self.obs);
         }
+        self.notify(None);
         Ok(())
+    }
+
+    /// Attaches `observer`: it hears every later episode start and control step.
+    pub fn observe(&mut self, observer: Box<dyn StepObserver>) {
+        self.observer = Some(observer);
+    }
+
+    /// Tells the observer the current state as an episode start (after attaching it mid-episode).
+    pub fn announce(&mut self) {
+        self.notify(None);
+    }
+
+    /// The robot description.
+    pub fn robot(&self) -> &RobotModel {
+        &self.robot
+    }
+
+    /// Detaches the observer (to [`StepObserver::finish`] it).
+    pub fn take_observer(&mut self) -> Option<Box<dyn StepObserver>> {
+        self.observer.take()
+    }
+
+    /// Simulated seconds since the env was built.
+    pub fn sim_time(&self) -> f64 {
+        self.sim_time
+    }
+
+    fn notify(&mut self, step: Option<(&Step, Option<[f32; 2]>)>) {
+        let Some(mut o) = self.observer.take() else { return };
+        let links = self.sim.link_poses();
+        let info = StepInfo {
+            env: self.env_index,
+            sim_time: self.sim_time,
+            episode_step: self.episode_step,
+            state: &self.state,
+            pose: self.pose(),
+            links: &links,
+            command: self.command,
+            targets: self.sim.targets(),
+            torques: self.sim.last_torques(),
+            reward: step.map(|(s, _)| (s.reward, &s.terms)),
+            contacts: self.foot_contacts,
+            push: step.and_then(|(_, p)| p),
+            terminated: step.is_some_and(|(s, _)| s.terminated),
+            truncated: step.is_some_and(|(s, _)| s.truncated),
+        };
+        match step {
+            None => o.on_reset(&info),
+            Some(_) => o.on_step(&info),
+        }
+        self.observer = Some(o);
     }
 
     /// Current policy observation (OBS_DIM,), layout in `sim::obs`.
@@ -253,6 +312,8 @@ impl LocomotionEnv {
         self.total_steps += 1;
         self.episode_step += 1;
         let dt = c.policy_dt();
+        self.sim_time += f64::from(dt);
+        let pushed = (self.push_age_s == 0.0).then_some(self.push);
 
         let (trunk_contact, limb, feet) = self.sim.contacts();
         self.foot_contacts = feet;
@@ -314,7 +375,9 @@ impl LocomotionEnv {
 
         let finished =
             (terminated || truncated).then(|| self.episode.summary(self.env_index, self.episode_step, dt, terminated));
-        Ok(Step { reward: step_reward, terms, terminated, truncated, finished })
+        let step = Step { reward: step_reward, terms, terminated, truncated, finished };
+        self.notify(Some((&step, pushed)));
+        Ok(step)
     }
 
     fn resample_command(&mut self) {
@@ -344,58 +407,15 @@ impl LocomotionEnv {
     }
 
     fn check_finite(&self, s: &RawState) -> anyhow::Result<()> {
-        let groups: [(&str, &[f32]); 6] = [
-            ("trunk position", &s.base_pos),
-            ("trunk orientation", &s.base_quat),
-            ("trunk linear velocity", &s.base_lin_vel),
-            ("trunk angular velocity", &s.base_ang_vel),
-            ("joint position", &s.q),
-            ("joint velocity", &s.qd),
-        ];
-        for (name, values) in groups {
-            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-                bail!(
-                    "env {}: the physics produced a non-finite {name} (component {i} = {}) at step {} (episode step {}, task {})",
-                    self.env_index,
-                    values[i],
-                    self.total_steps + 1,
-                    self.episode_step + 1,
-                    self.task
-                );
-            }
+        match first_non_finite(s) {
+            Some((name, i, v)) => bail!(
+                "env {}: the physics produced a non-finite {name} (component {i} = {v}) at step {} (episode step {}, task {})",
+                self.env_index,
+                self.total_steps + 1,
+                self.episode_step + 1,
+                self.task
+            ),
+            None => Ok(()),
         }
-        Ok(())
     }
-}
-
-fn uniform(rng: &mut ChaCha8Rng, range: [f32; 2]) -> f32 {
-    if range[0] == range[1] {
-        range[0]
-    } else {
-        rng.gen_range(range[0]..range[1])
-    }
-}
-
-/// The standing pose from the config, in leg-joint order.
-fn default_pose(cfg: &EnvConfig, robot: &RobotModel) -> [f32; 12] {
-    let _ = robot;
-    let mut q = [0.0; 12];
-    for leg in super::robot::Leg::ALL {
-        let l = leg.index();
-        q[3 * l] = if leg.is_left() { cfg.default_hip_left } else { cfg.default_hip_right };
-        q[3 * l + 1] = if leg.is_front() { cfg.default_thigh_front } else { cfg.default_thigh_rear };
-        q[3 * l + 2] = cfg.default_calf;
-    }
-    q
-}
-
-fn soft_limit(robot: &RobotModel, cfg: &EnvConfig, i: usize) -> (f32, f32) {
-    let j = &robot.joints[i];
-    let mid = 0.5 * (j.lower + j.upper);
-    let half = 0.5 * (j.upper - j.lower) * cfg.soft_limit_fraction;
-    (mid - half, mid + half)
-}
-
-fn build_sim(cfg: &EnvConfig, robot: &RobotModel, params: PhysicsParams, q0: &[f32; 12]) -> anyhow::Result<RobotSim> {
-    RobotSim::new(robot, cfg, params, q0)
 }

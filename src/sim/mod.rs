@@ -9,11 +9,14 @@
 //! - `env`: `LocomotionEnv`, reset(seed) / step(action).
 //! - `episode`: the step result and the finished-episode summary.
 //! - `pose`: the robot's world-frame pose (trunk box, leg joints, feet) for drawing it.
+//! - `observe`: a step observer attached to one env (recorders), with every link's world pose.
 //! - `vec_env`: a batch of envs stepped in parallel with rayon.
 
 mod env;
+mod env_setup;
 mod episode;
 pub mod obs;
+mod observe;
 mod physics;
 mod pose;
 pub mod reward;
@@ -25,6 +28,7 @@ mod vec_env;
 pub use env::LocomotionEnv;
 pub use episode::{EpisodeSummary, Step};
 pub use obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_BASE_LIN_VEL, PRIV_OBS_DIM};
+pub use observe::{LinkPose, StepInfo, StepObserver};
 pub use physics::RawState;
 pub use pose::{LegPose, RobotPose};
 pub use robot::{Leg, LegJoint, RobotModel, JOINTS_PER_LEG, NUM_LEGS};

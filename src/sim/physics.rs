@@ -332,6 +332,16 @@ impl RobotSim {
     }
 
     /// World position of each leg joint (its child link's origin), in leg-joint order (`sim::pose`).
+    /// World poses of the trunk and of each leg joint's child link (translation, quaternion x y z w).
+    pub fn link_poses(&self) -> [super::observe::LinkPose; 13] {
+        std::array::from_fn(|k| {
+            let id = if k == 0 { 0 } else { self.joint_links[k - 1] };
+            let pose = self.mb().link(id).expect("link exists").local_to_world();
+            let (t, r) = (pose.translation, pose.rotation);
+            super::observe::LinkPose { translation: t.into(), rotation: [r.x, r.y, r.z, r.w] }
+        })
+    }
+
     pub fn joint_positions(&self) -> [[f32; 3]; 12] {
         self.joint_links.map(|id| self.mb().link(id).expect("leg link exists").local_to_world().translation.into())
     }
