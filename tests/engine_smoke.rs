@@ -118,7 +118,7 @@ fn a_run_with_record_keeps_one_mcap_episode_of_every_learned_task_after_each_ste
             .collect();
         names.sort();
         assert_eq!(names, expected, "{step}");
-        let bytes = std::fs::read(folder.join(&expected[0])).unwrap();
+        let bytes = std::fs::read(folder.join(expected[0])).unwrap();
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
         let stats = summary.stats.unwrap();
         assert!(stats.message_count > 6, "an episode's messages");
