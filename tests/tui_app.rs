@@ -85,7 +85,7 @@ fn curve_and_mask_keys_change_what_is_drawn() {
     app.update(Action::NetworkNext);
     assert_eq!(app.network, 0, "the toy learner has one network");
     app.update(Action::OpenViewer);
-    assert!(app.messages.last().unwrap().contains("not there yet"));
+    assert!(app.messages.last().unwrap().contains("not learned yet"), "a pending task has nothing to show");
 }
 
 #[test]

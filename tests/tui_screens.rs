@@ -72,6 +72,12 @@ fn the_shipped_run_opens_on_every_screen() {
     app.robot.frame = None;
     app.update(Action::Worker(WorkerMsg::Robot { task: "crash:FL".into(), frame: Box::new(frame) }));
     snap!("robot_crash_fl_120x40", screen(&app, 120, 40, hide));
+
+    // `v`: Rerun is not there yet, so 20 s of the task are recorded for Foxglove.
+    act(&mut app, &mut worker, Action::OpenViewer, |a| a.messages.last().is_some_and(|m| m.starts_with("recorded")));
+    assert!(app.messages.iter().any(|m| m.contains("Rerun 3D view is not there yet")));
+    let episode = tmp.path().join("workbench/episodes/workbench-crash_FL.mcap");
+    assert!(mcap::Summary::read(&std::fs::read(&episode).unwrap()).unwrap().is_some(), "a complete MCAP");
     worker.shutdown();
 }
 

@@ -171,7 +171,10 @@ impl McapWriter {
             ),
             (
                 "quadcl.RewardTerms",
-                schema_json("quadcl.RewardTerms", json!({"reward": {"type": ["number", "null"]}, "terms": {"type": "object"}, "episode_step": {"type": "integer"}})),
+                schema_json(
+                    "quadcl.RewardTerms",
+                    json!({"reward": {"type": ["number", "null"]}, "terms": {"type": "object"}, "episode_step": {"type": "integer"}}),
+                ),
             ),
             (
                 "quadcl.Contacts",

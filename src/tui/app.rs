@@ -56,7 +56,7 @@ pub enum Action {
     ToggleRunThrough,
     EvaluateSelected,
     Save,
-    /// Open the selected task in the 3D viewer (Rerun).
+    /// The selected task in 3D: Rerun is not built yet, so an MCAP episode for Foxglove is recorded.
     OpenViewer,
     CurveMetricNext,
     /// Smoothing weight up / down; toggle off and on.
@@ -86,6 +86,12 @@ pub enum Outgoing {
     Engine(Command),
     /// Run the robot view of (policy, task); None stops it.
     Robot(Option<(PathBuf, String)>),
+    /// Record an episode of (policy, task) into the file.
+    Record {
+        policy: PathBuf,
+        task: String,
+        out: PathBuf,
+    },
 }
 
 /// The task in training, as its events tell it.
@@ -275,9 +281,7 @@ impl App {
                 self.send(Command::Save);
                 self.say("saving metrics.json and the log (a task in progress is saved when it ends)");
             }
-            Action::OpenViewer => {
-                self.say("the 3D view (Rerun) is not there yet: it comes with `quadcl view` (issue 12)")
-            }
+            Action::OpenViewer => self.record_selected(),
             Action::CurveMetricNext => self.metric = self.metric.next(),
             Action::SmoothingUp => self.smoothing = (self.smoothing + 0.05).min(0.99),
             Action::SmoothingDown => self.smoothing = (self.smoothing - 0.05).max(0.0),
@@ -367,6 +371,24 @@ impl App {
             self.robot = RobotView { task: want.as_ref().map(|w| w.1.clone()), ..Default::default() };
             self.outbox.push(Outgoing::Robot(want));
         }
+    }
+
+    /// The 3D view in Rerun is not built yet: records 20 s of the selected learned task as MCAP
+    /// (Foxglove) into the run folder's `episodes/` instead, and says so.
+    fn record_selected(&mut self) {
+        let (Some(row), Some(o)) = (self.selected(), self.opened.as_ref()) else { return };
+        let Some(policy) = o.last_checkpoint.clone().filter(|_| row.learned()) else {
+            self.say(format!("{} is not learned yet: nothing to show in 3D", row.task));
+            return;
+        };
+        let safe: String = row.task.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+        let out = o.run_dir.join(crate::engine::EPISODES).join(format!("workbench-{safe}.mcap"));
+        self.say(format!(
+            "the Rerun 3D view is not there yet (issue 12); recording {} to {} for Foxglove ...",
+            row.task,
+            out.display()
+        ));
+        self.outbox.push(Outgoing::Record { policy, task: row.task, out });
     }
 
     /// Asks the engine for the transfer preview of the next step's related tasks.

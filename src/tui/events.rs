@@ -36,6 +36,7 @@ impl App {
                 self.robot.frame = Some(*frame);
             }
             WorkerMsg::Robot { .. } => {}
+            WorkerMsg::Recorded { message, .. } => self.say(message),
             WorkerMsg::RobotFailed { task, error } => {
                 self.robot.error = Some(error.clone());
                 self.say(format!("robot view of {task}: {error}"));

@@ -62,6 +62,11 @@ pub enum WorkerMsg {
         task: String,
         frame: Box<RobotFrame>,
     },
+    /// A recording asked for from the workbench ended (the message says where, or why not).
+    Recorded {
+        task: String,
+        message: String,
+    },
     /// The robot view could not start.
     RobotFailed {
         task: String,
@@ -247,6 +252,27 @@ impl Worker {
         });
         self.robot = Some(stop);
         self.robot_handle = Some(handle);
+    }
+
+    /// Records 20 s of `task` under `policy` into `out` (MCAP) on a thread of its own.
+    pub fn record(&mut self, policy: PathBuf, task: String, out: PathBuf) {
+        let tx = self.sender.clone();
+        let handle = std::thread::spawn(move || {
+            let options =
+                crate::record::RecordOptions { seconds: 20.0, episodes: None, command: None, seed: 1, force: true };
+            let made = out.parent().map_or(Ok(()), std::fs::create_dir_all);
+            let message = match made
+                .map_err(anyhow::Error::from)
+                .and_then(|()| crate::record::record_episodes(&policy, &task, &out, &options))
+            {
+                Ok(s) => {
+                    format!("recorded {:.0} s of {task} to {} (open it in Foxglove)", s.sim_seconds, out.display())
+                }
+                Err(e) => format!("recording {task} failed: {e:#}"),
+            };
+            let _ = tx.send(WorkerMsg::Recorded { task, message });
+        });
+        self.stopping.push(handle);
     }
 
     /// Tells the robot view's thread to stop (without waiting for it: the UI stays responsive).

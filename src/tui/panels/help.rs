@@ -2,7 +2,7 @@
 
 use crate::tui::ui::{block, centered};
 use ratatui::layout::Rect;
-use ratatui::widgets::{Clear, Paragraph};
+use ratatui::widgets::{Clear, Paragraph, Wrap};
 use ratatui::Frame;
 
 /// Every key, one line each.
@@ -13,7 +13,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("1 2 3 4", "screens: Overview, Evaluation, Next task, Robot"),
     ("↑ ↓ / k j", "select a step (a row of the Next task panel when it has the focus)"),
     ("space", "start the next step / pause / resume training"),
-    ("r", "run through the rest of the sequence / stop after each step (the default)"),
+    ("r", "run through the rest of the sequence, or pause after each step (the default)"),
     ("e", "evaluate the selected learned task now (also while a step trains)"),
     ("S", "save metrics.json and the log now"),
     ("m", "curves: next metric (performance, return, tracking errors, fall rate)"),
@@ -22,12 +22,16 @@ pub const KEYS: &[(&str, &str)] = &[
     ("n", "masks: next network (actor, critic, CENet, ...)"),
     ("← → enter", "next task: change the row (switch, mode, related task)"),
     ("a", "next task: type a task to add at the end (e.g. invert:RR+noise:FR)"),
-    ("v", "open the selected task in the 3D viewer (Rerun)"),
+    ("v", "3D: Rerun is not built yet, so 20 s of the task are recorded as MCAP (Foxglove)"),
 ];
 
 pub fn draw(f: &mut Frame, area: Rect) {
     let text: Vec<String> = KEYS.iter().map(|(k, what)| format!(" {k:<16} {what}")).collect();
-    let rect = centered(area, 92, KEYS.len() as u16 + 2);
+    // As wide as the longest line allows; on a narrow terminal the lines wrap.
+    let width = (text.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u16 + 2).min(area.width);
+    let inner = width.saturating_sub(2).max(1) as usize;
+    let rows: usize = text.iter().map(|l| l.chars().count().div_ceil(inner).max(1)).sum();
+    let rect = centered(area, width, rows as u16 + 2);
     f.render_widget(Clear, rect);
-    f.render_widget(Paragraph::new(text.join("\n")).block(block("Keys", true)), rect);
+    f.render_widget(Paragraph::new(text.join("\n")).wrap(Wrap { trim: false }).block(block("Keys", true)), rect);
 }
