@@ -16,7 +16,7 @@
 //! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl`, `record` |
 //! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine` |
 //! | [`record`] | recorders of simulation steps: episodes as MCAP for Foxglove (`quadcl record`) | `util`, `config`, `sim`, `rl` |
-//! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine` |
+//! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record` |
 //!
 //! `engine` imports `sim` for what only a simulator-backed learner needs (the
 //! task perturbations it trains on, the shifted environments of sim-to-real
