@@ -134,3 +134,31 @@ fn a_recording_refuses_to_overwrite_an_unknown_format_and_an_unwritable_place() 
         format!("{:#}", record_episodes(&base(), "wobble:FL", &tmp.path().join("c.mcap"), &options(1.0)).unwrap_err());
     assert!(err.contains("wobble"), "{err}");
 }
+
+/// Counts what it hears.
+struct Count(Arc<Mutex<(usize, usize)>>);
+
+impl StepObserver for Count {
+    fn on_reset(&mut self, _: &StepInfo) {
+        self.0.lock().unwrap().0 += 1;
+    }
+    fn on_step(&mut self, _: &StepInfo) {
+        self.0.lock().unwrap().1 += 1;
+    }
+}
+
+#[test]
+fn an_observer_attaches_to_one_env_of_a_learners_batch() {
+    use quadcl::rl::{SimTrainEnv, TrainEnv};
+    let cfg = quadcl::config::EnvConfig { episode_s: 0.2, ..Default::default() };
+    let mut batch = SimTrainEnv::new(&cfg, &quadcl::sim::Perturbation::none(), 3, 1).unwrap();
+    let heard = Arc::new(Mutex::new((0, 0)));
+    batch.observe(1, Box::new(Count(heard.clone()))).unwrap();
+    for _ in 0..25 {
+        batch.step(&vec![0.0; 3 * quadcl::sim::ACT_DIM]).unwrap();
+    }
+    // 0.2 s episodes at 0.02 s: ten steps each, so two auto-resets in 25 steps, plus the start it was attached at.
+    assert_eq!(*heard.lock().unwrap(), (3, 25));
+    let err = format!("{:#}", batch.observe(3, Box::new(Count(heard.clone()))).unwrap_err());
+    assert!(err.contains("no env 3"), "{err}");
+}

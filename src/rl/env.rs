@@ -40,4 +40,10 @@ pub trait TrainEnv {
     fn obs_histories(&self) -> &[f32];
     /// Steps every environment with `actions` (N, act).
     fn step(&mut self, actions: &[f32]) -> anyhow::Result<VecStep>;
+    /// Attaches a step observer (a recorder) to environment `env`; environments that are not
+    /// simulated (the toy ones) cannot take one.
+    fn observe(&mut self, env: usize, observer: Box<dyn crate::sim::StepObserver>) -> anyhow::Result<()> {
+        let _ = (env, observer);
+        anyhow::bail!("this environment is not simulated: there is nothing to observe")
+    }
 }

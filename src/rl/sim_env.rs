@@ -51,4 +51,8 @@ impl TrainEnv for SimTrainEnv {
     fn step(&mut self, actions: &[f32]) -> anyhow::Result<VecStep> {
         self.inner.step(actions)
     }
+
+    fn observe(&mut self, env: usize, observer: Box<dyn crate::sim::StepObserver>) -> anyhow::Result<()> {
+        self.inner.observe(env, observer)
+    }
 }

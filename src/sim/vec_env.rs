@@ -73,6 +73,15 @@ impl VecEnv {
         Ok(v)
     }
 
+    /// Attaches `observer` to env `env` (it hears that env's episode starts and steps).
+    pub fn observe(&mut self, env: usize, observer: Box<dyn super::observe::StepObserver>) -> anyhow::Result<()> {
+        let n = self.envs.len();
+        let e = self.envs.get_mut(env).ok_or_else(|| anyhow::anyhow!("no env {env}: the batch has {n}"))?;
+        e.observe(observer);
+        e.announce();
+        Ok(())
+    }
+
     /// Number of envs.
     pub fn num_envs(&self) -> usize {
         self.envs.len()
