@@ -155,7 +155,7 @@ fn an_observer_attaches_to_one_env_of_a_learners_batch() {
     let heard = Arc::new(Mutex::new((0, 0)));
     batch.observe(1, Box::new(Count(heard.clone()))).unwrap();
     for _ in 0..25 {
-        batch.step(&vec![0.0; 3 * quadcl::sim::ACT_DIM]).unwrap();
+        batch.step(&[0.0; 3 * quadcl::sim::ACT_DIM]).unwrap();
     }
     // 0.2 s episodes at 0.02 s: ten steps each, so two auto-resets in 25 steps, plus the start it was attached at.
     assert_eq!(*heard.lock().unwrap(), (3, 25));
