@@ -115,3 +115,27 @@ fn gait_reports_the_contact_pattern_of_a_held_command() {
         assert!(line.as_str().unwrap().starts_with(foot), "{line}");
     }
 }
+
+#[test]
+fn train_refuses_an_out_that_holds_a_run_unless_resume_or_force() {
+    let (dir, out) = train_tiny();
+    let config = dir.path().join("tiny.toml");
+    let before = std::fs::read(out.join("metrics.jsonl")).unwrap();
+    let again = quadcl().args(["train", "--config"]).arg(&config).arg("--out").arg(&out).output().unwrap();
+    assert!(!again.status.success());
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(
+        err.contains("already holds a training run") && err.contains("--force") && err.contains("--resume"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(out.join("metrics.jsonl")).unwrap(), before, "nothing was touched");
+    let forced = quadcl()
+        .args(["train", "--force", "--seed", "9", "--config"])
+        .arg(&config)
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(forced.success());
+    assert_ne!(std::fs::read(out.join("metrics.jsonl")).unwrap(), before, "--force trained anew (another seed)");
+}

@@ -28,8 +28,16 @@ pub struct TrainArgs {
     pub seed: Option<u64>,
     /// Go on from DIR/checkpoint/ (written every `ppo.checkpoint_every`
     /// iterations) with the same config; `--iterations` may raise the total.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "force")]
     pub resume: bool,
+    /// Train anew into an --out that already holds a training run, replacing its results.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// What in `out` says it holds a training run already.
+fn existing_run(out: &std::path::Path) -> Option<&'static str> {
+    ["metrics.jsonl", "policy", "checkpoint", "summary.json"].into_iter().find(|name| out.join(name).exists())
 }
 
 pub fn run(args: TrainArgs) -> anyhow::Result<()> {
@@ -42,6 +50,12 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     }
     let task: Perturbation = args.task.parse()?;
     let task_name = task.to_string();
+    if let Some(found) = existing_run(&args.out).filter(|_| !args.resume && !args.force) {
+        anyhow::bail!(
+            "{} already holds a training run ({found}): --resume continues it, --force replaces it, or choose another --out",
+            args.out.display()
+        );
+    }
     let resume = if args.resume { Some(quadcl::rl::load_resume_point(&config, &task_name, &args.out)?) } else { None };
     let env_seed = match &resume {
         Some((_, state)) => quadcl::util::derive_seed(config.seed, quadcl::util::Stream::Trainer(state.iteration)),
