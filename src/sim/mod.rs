@@ -6,7 +6,7 @@
 //! - `tasks`: leg perturbations (crash / invert / noise) and their syntax.
 //! - [`obs`]: observation and privileged-observation layouts.
 //! - [`reward`]: the paper's Table 1, one function per term.
-//! - `env`: `LocomotionEnv`, reset(seed) / step(action).
+//! - `env`: `LocomotionEnv`, reset(seed) / step(action); `env_setup` its plain helpers.
 //! - `episode`: the step result and the finished-episode summary.
 //! - `pose`: the robot's world-frame pose (trunk box, leg joints, feet) for drawing it.
 //! - `observe`: a step observer attached to one env (recorders), with every link's world pose.

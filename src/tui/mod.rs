@@ -1,6 +1,8 @@
 //! The workbench: a terminal app over the engine. `app` holds the state and
-//! `update(Action)`; `input` turns keys into actions; `ui` and `panels/` draw;
-//! `worker` runs the session (and the robot view) on their own threads.
+//! `update(Action)`, `events` what the engine's events do to it, `timeline`
+//! and `next_task` the state of those two panels; `input` turns keys into
+//! actions; `ui` lays out and `panels/` draw; `worker` runs the session (and
+//! the robot view, and recordings) on threads of their own.
 //! [`run_app`] takes its backend and its event source, so tests drive the real
 //! loop on ratatui's `TestBackend` with scripted events; [`run`] opens the
 //! terminal (raw mode, alternate screen, mouse capture) and restores it on
