@@ -210,3 +210,23 @@ fn settings_chosen_for_the_next_step_survive_a_reopen_and_an_interrupted_step_re
     assert_eq!(done_b.eval_matrix, done_a.eval_matrix);
     assert_eq!(done_b.steps, done_a.steps);
 }
+
+#[test]
+fn a_start_interrupted_before_metrics_json_is_started_again_but_a_run_is_never_overwritten() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = write(tmp.path(), "run.toml", &format!("{HEAD}{TWO}"));
+    let out = tmp.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("run.toml"), "half").unwrap();
+    let mut runner = Runner::open(&cfg, &out, OpenMode::ResumeOrNew, false).unwrap();
+    assert_eq!(runner.session().completed_steps(), 0, "nothing was there: a new run");
+    runner.train(Some(1)).unwrap();
+    let before = std::fs::read(out.join("metrics.json")).unwrap();
+    let err = Runner::open(&cfg, &out, OpenMode::New, false).err().unwrap();
+    assert!(format!("{err:#}").contains("already holds a run"), "{err:#}");
+    assert_eq!(std::fs::read(out.join("metrics.json")).unwrap(), before);
+    // Checkpoints without a metrics.json are a run too: never written over.
+    std::fs::remove_file(out.join("metrics.json")).unwrap();
+    let err = Runner::open(&cfg, &out, OpenMode::New, false).err().unwrap();
+    assert!(format!("{err:#}").contains("already holds a run"), "{err:#}");
+}

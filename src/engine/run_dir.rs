@@ -114,9 +114,12 @@ impl RunDir {
         self.root.join(CHECKPOINTS).join(format!("step-{step:02}-{safe}"))
     }
 
-    /// Whether the folder already holds a run.
+    /// Whether the folder already holds a run: a `metrics.json` (written right after
+    /// `run.toml` when a run starts) or a checkpoint. A `run.toml` alone is a start that
+    /// was interrupted before anything was recorded: nothing is lost by starting again.
     pub fn has_run(&self) -> bool {
-        self.metrics_path().exists() || self.root.join(RUN_FILE).exists()
+        let checkpoints = std::fs::read_dir(self.root.join(CHECKPOINTS)).is_ok_and(|mut d| d.next().is_some());
+        self.metrics_path().exists() || checkpoints
     }
 
     /// Writes the checkpoint of step `step` (training `task`) as a whole

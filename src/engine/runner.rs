@@ -152,14 +152,21 @@ impl Runner {
         let source = RunDir::new(prior).checkpoint(done - 1, &prev.steps[done - 1].name);
         let mut runner = Self::build(&cfg, text, dir, echo)?;
         runner.session.restore(prev.results(), &source).with_context(|| format!("continuing {}", prior.display()))?;
-        let target = runner.dir.checkpoint(done - 1, &prev.steps[done - 1].name);
-        replace_dir(&target, |fresh| copy_files(&source, fresh))?;
-        runner.write_start()?;
+        // The whole folder is written beside `out` and renamed into place: an interruption
+        // leaves either no run or the complete continuation.
         let log = std::fs::read_to_string(prior.join(super::run_dir::LOG_FILE)).unwrap_or_default();
         if let Ok(mut l) = runner.lines.lock() {
             *l = format!("{log}continued from {} after {done} steps\n", prior.display());
         }
-        runner.dir.write_log(&runner.log_text())?;
+        let (metrics, log) = (runner.metrics(), runner.log_text());
+        let name = prev.steps[done - 1].name.clone();
+        replace_dir(out, |fresh| {
+            let staged = RunDir::new(fresh);
+            replace_dir(&staged.checkpoint(done - 1, &name), |dir| copy_files(&source, dir))?;
+            write_atomic(&fresh.join(RUN_FILE), runner.run_text.as_bytes())?;
+            staged.write_metrics(&metrics)?;
+            staged.write_log(&log)
+        })?;
         Ok(runner)
     }
 
