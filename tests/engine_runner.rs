@@ -137,6 +137,9 @@ fn element_views_agree_with_the_mask_statistics() {
             assert_eq!(count(ElementView::SelectedFromOccupied), own.from_occupied);
             assert_eq!(count(ElementView::PrivateToTask), private);
             assert_eq!(count(ElementView::Vacant), stats.vacant);
+            for v in ElementView::ALL {
+                assert_eq!(view.counts[v as usize], count(v), "{v:?} counted in the view");
+            }
         }
     }
     let lift = runner.session().learner().transfer_lift(&[0]);

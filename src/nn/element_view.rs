@@ -71,6 +71,8 @@ pub struct LayerView {
     pub shape: [usize; 2],
     /// One [`ElementView`] code per element, row-major (out, in).
     pub codes: Vec<u8>,
+    /// How many elements have each view (indexed by code): the live fractions of a task in training.
+    pub counts: [usize; 6],
 }
 
 /// How many elements of one layer the transfer bonus lifts.
@@ -96,7 +98,7 @@ fn layer_view(network: &str, l: &MaskedLinear, task: TaskId) -> LayerView {
         (Some(_), None) => l.finish_order.iter().filter_map(|t| l.masks.get(t)).collect(),
         (None, None) => Vec::new(),
     };
-    let codes = (0..n)
+    let codes: Vec<u8> = (0..n)
         .map(|i| {
             let selected = match live {
                 Some(sel) => sel[i],
@@ -113,7 +115,9 @@ fn layer_view(network: &str, l: &MaskedLinear, task: TaskId) -> LayerView {
             view as u8
         })
         .collect();
-    LayerView { network: network.to_string(), layer: l.name.clone(), shape: [l.out_dim, l.in_dim], codes }
+    let mut counts = [0usize; 6];
+    codes.iter().for_each(|c| counts[*c as usize] += 1);
+    LayerView { network: network.to_string(), layer: l.name.clone(), shape: [l.out_dim, l.in_dim], codes, counts }
 }
 
 /// Every layer of every network, seen from `task`.

@@ -100,17 +100,25 @@ fn bar(fraction: f64, width: usize) -> String {
 fn layer_line(stats: Option<&LayerMasks>, view: &LayerView, task: &str, width: u16) -> Line<'static> {
     let total = (view.shape[0] * view.shape[1]).max(1) as f64;
     let head = format!("{} {}x{} ", view.layer, view.shape[0], view.shape[1]);
-    let Some(s) = stats else { return Line::raw(head) };
-    let mine = s.per_task.iter().find(|p| p.task == task);
-    let (sel, vac, occ) = mine.map_or((0, 0, 0), |p| (p.selected, p.from_vacant, p.from_occupied));
-    let private: usize = s.private.get(task).copied().unwrap_or(0);
+    // A finished task's figures come from the mask statistics; a task in training has none
+    // yet, so its live element views' counts stand in (the same quantities).
+    let mine = stats.and_then(|s| s.per_task.iter().find(|p| p.task == task).map(|p| (s, p)));
+    let (sel, vac, occ, private, vacant) = match mine {
+        Some((s, p)) => {
+            (p.selected, p.from_vacant, p.from_occupied, s.private.get(task).copied().unwrap_or(0), s.vacant)
+        }
+        None => {
+            let c = view.counts;
+            (c[3] + c[4] + c[5], c[3] + c[5], c[4], c[5], c[0])
+        }
+    };
     let tail = format!(
         " sel {:.1}% (vac {:.1} occ {:.1}) priv {:.1}% · vacant {:.1}%",
         100.0 * sel as f64 / total,
         100.0 * vac as f64 / total,
         100.0 * occ as f64 / total,
         100.0 * private as f64 / total,
-        100.0 * s.vacant as f64 / total
+        100.0 * vacant as f64 / total
     );
     let room = (width as usize).saturating_sub(head.chars().count() + tail.chars().count()).clamp(0, 16);
     Line::from(vec![
@@ -206,7 +214,8 @@ mod tests {
         // 4 x 2 layer (out 4, in 2): the first two outputs selected from vacant, the rest vacant
         // but for one occupied element.
         let codes = vec![3, 3, 3, 3, 0, 0, 0, 1];
-        let view = LayerView { network: "n".into(), layer: "n.l0".into(), shape: [4, 2], codes };
+        let view =
+            LayerView { network: "n".into(), layer: "n.l0".into(), shape: [4, 2], codes, counts: [3, 1, 0, 4, 0, 0] };
         let px = heat_pixels(&view, 2, 1);
         assert_eq!(px.len(), 1);
         assert_eq!(px[0][0], [0, 0, 0, 4, 0, 0]);
