@@ -176,7 +176,6 @@ impl LocomotionEnv {
             sim_time: self.sim_time,
             episode_step: self.episode_step,
             state: &self.state,
-            pose: self.pose(),
             links: &links,
             command: self.command,
             targets: self.sim.targets(),

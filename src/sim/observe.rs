@@ -6,7 +6,6 @@
 //! observer pays nothing.
 
 use super::physics::RawState;
-use super::pose::RobotPose;
 use super::reward::RewardTerms;
 
 /// One link's world pose: translation (m) and rotation quaternion (x, y, z, w).
@@ -27,8 +26,6 @@ pub struct StepInfo<'a> {
     pub episode_step: usize,
     /// Trunk pose and velocities, joint angles and speeds, foot points.
     pub state: &'a RawState,
-    /// The trunk box and the leg joints (for drawing).
-    pub pose: RobotPose,
     /// World pose of the trunk (first) and of the link each leg joint moves, in leg-joint order.
     pub links: &'a [LinkPose; 13],
     /// The velocity command (vx, vy, wz).
