@@ -34,7 +34,9 @@ pub use learner::{Evaluation, Learner, TaskStart};
 pub use ppo_learner::{make_ppo_learner, max_episode_return, max_reward_rate, PpoTaskLearner};
 pub use results::{CommandTracking, SessionResults, StepRecord, Summary, TaskCurve};
 pub use run_config::{EvalConfig, LearnerKind, RunConfig, RunSection};
-pub use run_dir::{MetricsFile, RunDir, CHECKPOINTS, CHOSEN_FILE, EPISODES, LOG_FILE, METRICS_FILE, RUN_FILE};
+pub use run_dir::{
+    task_file_name, MetricsFile, RunDir, CHECKPOINTS, CHOSEN_FILE, EPISODES, LOG_FILE, METRICS_FILE, RUN_FILE,
+};
 pub use runner::{make_learner, OpenMode, Runner};
 pub use session::{ChosenSettings, Session, StepOutcome};
 pub use shift::{DelayedActions, Shift};

@@ -93,6 +93,11 @@ impl MetricsFile {
     }
 }
 
+/// `task` as a file-name part: `crash:FL` -> `crash_FL`, `invert:RR+noise:FR` -> `invert_RR_noise_FR`.
+pub fn task_file_name(task: &str) -> String {
+    task.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
+}
+
 /// The output folder of a run.
 #[derive(Debug, Clone)]
 pub struct RunDir {
@@ -110,8 +115,7 @@ impl RunDir {
 
     /// The checkpoint folder of step `step` (0-based) training `task`.
     pub fn checkpoint(&self, step: usize, task: &str) -> PathBuf {
-        let safe: String = task.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
-        self.root.join(CHECKPOINTS).join(format!("step-{step:02}-{safe}"))
+        self.root.join(CHECKPOINTS).join(format!("step-{step:02}-{}", task_file_name(task)))
     }
 
     /// Whether the folder already holds a run: a `metrics.json` (written right after

@@ -16,7 +16,7 @@
 use super::events::{Event, Observer};
 use super::learner::Learner;
 use super::run_config::{LearnerKind, RunConfig};
-use super::run_dir::{MetricsFile, RunDir, CHOSEN_FILE, EPISODES, RUN_FILE};
+use super::run_dir::{task_file_name, MetricsFile, RunDir, CHOSEN_FILE, EPISODES, RUN_FILE};
 use super::session::{ChosenSettings, Session, StepOutcome};
 use super::toy_learner::ToyLearner;
 use crate::cl::TaskSpec;
@@ -254,8 +254,6 @@ impl Runner {
         std::fs::create_dir_all(&folder).with_context(|| format!("creating {}", folder.display()))?;
         let row = &results.eval_matrix.rows[step];
         for (t, name) in results.tasks.iter().enumerate().filter(|(t, _)| row.get(*t).copied().flatten().is_some()) {
-            let safe: String =
-                name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
             let options = RecordOptions {
                 seconds: self.episode_s,
                 episodes: Some(1),
@@ -263,7 +261,7 @@ impl Runner {
                 seed: crate::util::derive_seed(self.seed, crate::util::Stream::SequenceEval(t)),
                 force: true,
             };
-            record_episodes(&checkpoint, name, &folder.join(format!("{safe}.mcap")), &options)
+            record_episodes(&checkpoint, name, &folder.join(format!("{}.mcap", task_file_name(name))), &options)
                 .with_context(|| format!("recording {name} after step {step}"))?;
         }
         Ok(())

@@ -381,8 +381,8 @@ impl App {
             self.say(format!("{} is not learned yet: nothing to show in 3D", row.task));
             return;
         };
-        let safe: String = row.task.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
-        let out = o.run_dir.join(crate::engine::EPISODES).join(format!("workbench-{safe}.mcap"));
+        let name = crate::engine::task_file_name(&row.task);
+        let out = o.run_dir.join(crate::engine::EPISODES).join(format!("workbench-{name}.mcap"));
         self.say(format!(
             "the Rerun 3D view is not there yet (issue 12); recording {} to {} for Foxglove ...",
             row.task,
