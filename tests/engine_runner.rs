@@ -233,3 +233,28 @@ fn a_start_interrupted_before_metrics_json_is_started_again_but_a_run_is_never_o
     let err = Runner::open(&cfg, &out, OpenMode::New, false).err().unwrap();
     assert!(format!("{err:#}").contains("already holds a run"), "{err:#}");
 }
+
+#[test]
+fn forward_transfer_against_a_reference_run_is_the_same_in_events_and_in_metrics_json() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = write(tmp.path(), "a.toml", &format!("{HEAD}{TWO}"));
+    let a = tmp.path().join("a");
+    Runner::open(&cfg, &a, OpenMode::New, false).unwrap().train(None).unwrap();
+    let with_ref = HEAD.replace("[run]\n", &format!("[run]\nreference = {:?}\n", a.join("metrics.json")));
+    let cfg_b = write(tmp.path(), "b.toml", &format!("{with_ref}{TWO}"));
+    let mut b = Runner::open(&cfg_b, &tmp.path().join("b"), OpenMode::New, false).unwrap();
+    let (tx, events) = channel();
+    b.session_mut().add_observer(Box::new(ChannelObserver(tx)));
+    b.train(None).unwrap();
+    let last = events
+        .try_iter()
+        .filter_map(|e| match e {
+            Event::Measures { summary, .. } => Some(summary),
+            _ => None,
+        })
+        .last()
+        .unwrap();
+    let written = b.metrics().summary;
+    assert_eq!(last, written);
+    assert!(written.forward_transfer.iter().all(|f| f.is_some()), "{:?}", written.forward_transfer);
+}

@@ -61,7 +61,6 @@ pub struct Runner {
     run_text: String,
     /// Sequence entries `run.toml` holds.
     written_tasks: usize,
-    reference: Option<MetricsFile>,
     keep_last_checkpoint_only: bool,
     base_policy: Option<PathBuf>,
     /// Record one evaluation episode of every learned task after each step (`--record mcap`).
@@ -199,7 +198,6 @@ impl Runner {
             session,
             dir,
             run_text,
-            reference,
             keep_last_checkpoint_only: cfg.run.keep_last_checkpoint_only,
             base_policy: cfg.run.base_policy.clone(),
             record: false,
@@ -274,7 +272,7 @@ impl Runner {
 
     /// `metrics.json` as it stands.
     pub fn metrics(&self) -> MetricsFile {
-        let reference = |name: &str| self.reference.as_ref().and_then(|r| r.reference_curve(name));
+        let reference = |name: &str| self.session.reference_curve(name);
         MetricsFile::new(self.session.results(), self.session.sequence().tasks.len(), &reference)
     }
 

@@ -187,6 +187,11 @@ impl Session {
         self.reference = reference;
     }
 
+    /// The from-scratch curve of task `name` ([`Session::set_reference`]), if any.
+    pub fn reference_curve(&self, name: &str) -> Option<Vec<f64>> {
+        self.reference.get(name).cloned()
+    }
+
     /// Tells every observer.
     fn emit(&mut self, event: Event) {
         for o in &mut self.observers {
@@ -360,7 +365,7 @@ impl Session {
         self.results.steps.push(p.record);
         let report = self.learner.mask_report(&self.results.tasks);
         self.emit(Event::MaskStats { after_step: step, report });
-        let reference = |name: &str| self.reference.get(name).cloned();
+        let reference = |name: &str| self.reference_curve(name);
         let (eval_matrix, summary) = (self.results.eval_matrix.clone(), self.results.summary(&reference));
         self.emit(Event::Measures { after_step: step, eval_matrix, summary });
         if let Some(t) = self.watched {
