@@ -131,6 +131,13 @@ fn object(properties: Value, required: &[&str]) -> Value {
     json!({"type": "object", "properties": properties, "required": required})
 }
 
+/// The JSON schema of a message named `title` with `properties`, none required.
+pub fn message_schema(title: &str, properties: Value) -> Value {
+    let mut s = object(properties, &[]);
+    s["title"] = json!(title);
+    s
+}
+
 fn number() -> Value {
     json!({"type": "number"})
 }
@@ -154,8 +161,8 @@ pub fn frame_transforms_schema() -> Value {
                "translation": vec3(), "rotation": quat()}),
         &["timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"],
     );
-    let mut s = object(json!({"transforms": {"type": "array", "items": t}}), &["transforms"]);
-    s["title"] = json!("foxglove.FrameTransforms");
+    let mut s = message_schema("foxglove.FrameTransforms", json!({"transforms": {"type": "array", "items": t}}));
+    s["required"] = json!(["transforms"]);
     s
 }
 
@@ -173,7 +180,10 @@ pub fn scene_update_schema() -> Value {
                "models": any}),
         &["timestamp", "frame_id", "id", "lifetime", "frame_locked"],
     );
-    let mut s = object(json!({"deletions": any, "entities": {"type": "array", "items": entity}}), &["entities"]);
-    s["title"] = json!("foxglove.SceneUpdate");
+    let mut s = message_schema(
+        "foxglove.SceneUpdate",
+        json!({"deletions": any, "entities": {"type": "array", "items": entity}}),
+    );
+    s["required"] = json!(["entities"]);
     s
 }

@@ -122,10 +122,6 @@ struct Rewards {
     episode_step: usize,
 }
 
-fn schema_json(title: &str, properties: Value) -> Value {
-    json!({"title": title, "type": "object", "properties": properties})
-}
-
 impl McapRecorder {
     /// Starts `path` (written as `path.partial` until [`StepObserver::finish`]) for `robot`.
     /// A file that cannot be created is an error now.
@@ -157,28 +153,28 @@ impl McapWriter {
             ("foxglove.SceneUpdate", foxglove::scene_update_schema()),
             (
                 "quadcl.JointStates",
-                schema_json(
+                foxglove::message_schema(
                     "quadcl.JointStates",
                     json!({"name": arr("string"), "position": arr("number"), "velocity": arr("number"), "effort": arr("number")}),
                 ),
             ),
             (
                 "quadcl.Command",
-                schema_json(
+                foxglove::message_schema(
                     "quadcl.Command",
                     json!({"vx": {"type": "number"}, "vy": {"type": "number"}, "wz": {"type": "number"}}),
                 ),
             ),
             (
                 "quadcl.RewardTerms",
-                schema_json(
+                foxglove::message_schema(
                     "quadcl.RewardTerms",
                     json!({"reward": {"type": ["number", "null"]}, "terms": {"type": "object"}, "episode_step": {"type": "integer"}}),
                 ),
             ),
             (
                 "quadcl.Contacts",
-                schema_json(
+                foxglove::message_schema(
                     "quadcl.Contacts",
                     json!({"feet": {"type": "object"}, "push": {"type": ["array", "null"]}}),
                 ),
