@@ -16,7 +16,7 @@
 //! root (the frame figures need `policies/sequence-a1`; without it they are skipped).
 
 use quadcl::engine::{Event, Observer, OpenMode, Runner};
-use quadcl::tui::{dispatch, tick, ui, Action, App, Clock, OpenSpec, Screen, Worker, WorkerMsg};
+use quadcl::tui::{tick, ui, wait_until, Action, App, Clock, OpenSpec, Screen, Worker, WorkerMsg};
 use ratatui::backend::TestBackend;
 use ratatui::Terminal;
 use serde_json::json;
@@ -57,19 +57,6 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Waits for worker messages until `until` holds (at most 60 s).
-fn pump(app: &mut App, worker: &mut Worker, until: impl Fn(&App) -> bool) -> anyhow::Result<()> {
-    let start = Instant::now();
-    while !until(app) {
-        anyhow::ensure!(start.elapsed() < Duration::from_secs(60), "the workbench did not open: {:?}", app.messages);
-        dispatch(app, worker);
-        if let Ok(m) = worker.messages.recv_timeout(Duration::from_millis(20)) {
-            app.update(Action::Worker(m));
-        }
-    }
-    Ok(())
-}
-
 fn frames(seconds: f64, report: &mut Report) -> anyhow::Result<()> {
     if !Path::new("policies/sequence-a1/metrics.json").exists() {
         report.insert("tui_frame_ms_200x60".into(), json!(null));
@@ -83,7 +70,7 @@ fn frames(seconds: f64, report: &mut Report) -> anyhow::Result<()> {
     };
     let mut app = App::new(spec.run_dir.clone(), (200, 60), Clock::Ticks(0));
     let mut worker = Worker::spawn(spec);
-    pump(&mut app, &mut worker, |a| a.opened.is_some() && a.views.is_some())?;
+    wait_until(&mut app, &mut worker, Duration::from_secs(60), |a| a.opened.is_some() && a.views.is_some())?;
     let mut viewer = quadcl::rl::RobotViewer::new(
         Path::new("policies/sequence-a1/checkpoints/step-03-crash_FR"),
         "crash:FR",
@@ -171,7 +158,7 @@ fn training(seconds: f64, report: &mut Report) -> anyhow::Result<()> {
     let spec = OpenSpec { run_dir: tmp.path().join("tui"), config: Some(config), continues: None };
     let mut app = App::new(spec.run_dir.clone(), (200, 60), Clock::Real(Instant::now()));
     let mut worker = Worker::spawn(spec);
-    pump(&mut app, &mut worker, |a| a.opened.is_some())?;
+    wait_until(&mut app, &mut worker, Duration::from_secs(60), |a| a.opened.is_some())?;
     let mut terminal = Terminal::new(TestBackend::new(200, 60))?;
     app.update(Action::StartPause);
     let mut arrivals: Vec<Instant> = Vec::new();

@@ -57,6 +57,34 @@ pub fn dispatch(app: &mut App, worker: &mut Worker) {
     }
 }
 
+/// Sends what the app queued and applies the worker's messages until `until` holds; an error
+/// after `timeout` says where the workbench stood (scripts, benchmarks and tests drive it so).
+pub fn wait_until(
+    app: &mut App,
+    worker: &mut Worker,
+    timeout: Duration,
+    until: impl Fn(&App) -> bool,
+) -> anyhow::Result<()> {
+    let start = std::time::Instant::now();
+    loop {
+        dispatch(app, worker);
+        if until(app) {
+            return Ok(());
+        }
+        anyhow::ensure!(
+            start.elapsed() < timeout,
+            "the workbench did not get there in {timeout:?}; messages: {:?}; paused {} live {:?} steps {:?}",
+            app.messages,
+            app.paused,
+            app.live.as_ref().map(|l| l.iteration),
+            app.opened.as_ref().map(|o| o.results.steps.len())
+        );
+        if let Ok(m) = worker.messages.recv_timeout(Duration::from_millis(20)) {
+            app.update(Action::Worker(m));
+        }
+    }
+}
+
 /// One pass of the loop: the worker's messages in, the queued commands out, and a frame
 /// drawn if anything changed (a training iteration or a robot frame, a key, a resize).
 pub fn tick<B: Backend>(terminal: &mut Terminal<B>, app: &mut App, worker: &mut Worker) -> anyhow::Result<()>

@@ -7,7 +7,7 @@ use quadcl::tui::{dispatch, ui, Action, App, Clock, OpenSpec, Worker};
 use ratatui::backend::TestBackend;
 use ratatui::Terminal;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// A toy-learner run file: three quick tasks.
 pub const TOY_RUN: &str = "seed = 4\niterations = 6\n[run]\nlearner = \"toy\"\n[net.mask]\nentropy_iterations = 2\n\
@@ -51,24 +51,7 @@ pub fn act(app: &mut App, worker: &mut Worker, action: Action, until: impl Fn(&A
 
 /// Sends what the app queued and applies the worker's messages until `until` holds (at most 20 s).
 pub fn pump(app: &mut App, worker: &mut Worker, until: impl Fn(&App) -> bool) {
-    let start = Instant::now();
-    loop {
-        dispatch(app, worker);
-        if until(app) {
-            return;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(20),
-            "the workbench did not get there; messages: {:?}; paused {} live {:?} steps {:?}",
-            app.messages,
-            app.paused,
-            app.live.as_ref().map(|l| l.iteration),
-            app.opened.as_ref().map(|o| o.results.steps.len())
-        );
-        if let Ok(m) = worker.messages.recv_timeout(Duration::from_millis(50)) {
-            app.update(Action::Worker(m));
-        }
-    }
+    quadcl::tui::wait_until(app, worker, Duration::from_secs(20), until).unwrap_or_else(|e| panic!("{e:#}"));
 }
 
 /// Applies every message already waiting.
