@@ -21,32 +21,23 @@ trap cleanup EXIT
 sed 's/^iterations = 3$/iterations = 400/' scenes/smoke.toml > "$TMP/smoke.toml"
 
 pane() { tmux capture-pane -p -t "$SESSION" 2>/dev/null || true; }
-# wait_for TEXT STAGE [SECONDS]: until the pane shows TEXT (a grep -E pattern).
-wait_for() {
-  local deadline=$((SECONDS + ${3:-60}))
-  until pane | grep -Eq -- "$1"; do
+# wait_screen shows|lacks TEXT STAGE [SECONDS]: until the pane shows (or no longer shows)
+# TEXT, a grep -E pattern; fails with the pane printed after SECONDS (default 60).
+wait_screen() {
+  local want=$1 pattern=$2 stage=$3 deadline=$((SECONDS + ${4:-60}))
+  while true; do
+    if pane | grep -Eq -- "$pattern"; then [ "$want" = shows ] && break; else [ "$want" = lacks ] && break; fi
     if [ $SECONDS -ge $deadline ]; then
-      echo "tui_smoke: FAILED at '$2': no '$1' on the screen:" >&2
+      echo "tui_smoke: FAILED at '$stage': the screen $([ "$want" = shows ] && echo lacks || echo still shows) '$pattern':" >&2
       pane >&2
       exit 1
     fi
     sleep 0.2
   done
-  echo "tui_smoke: ok: $2"
+  echo "tui_smoke: ok: $stage"
 }
-# wait_gone TEXT STAGE: until the pane no longer shows TEXT.
-wait_gone() {
-  local deadline=$((SECONDS + 30))
-  while pane | grep -Eq -- "$1"; do
-    if [ $SECONDS -ge $deadline ]; then
-      echo "tui_smoke: FAILED at '$2': '$1' is still on the screen:" >&2
-      pane >&2
-      exit 1
-    fi
-    sleep 0.2
-  done
-  echo "tui_smoke: ok: $2"
-}
+wait_for() { wait_screen shows "$@"; }
+wait_gone() { wait_screen lacks "$1" "$2" 30; }
 
 tmux new-session -d -s "$SESSION" -x 120 -y 40 "$BIN tui --run $TMP/run --config $TMP/smoke.toml 2>$TMP/stderr; echo exited \$? > $TMP/exit; sleep 30"
 wait_for "Sequence" "the first screen"
