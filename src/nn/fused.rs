@@ -15,6 +15,7 @@
 //! candle's autograd sees a single node, so none of its per-node gradient
 //! buffers are made for the (batch, 512) activations.
 
+use super::activation::contiguous_f32;
 use crate::config::net::Activation;
 use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use gemm::{gemm, Parallelism};
@@ -209,13 +210,6 @@ pub fn fused_mlp(
     }
 }
 
-fn slice<'a>(s: &'a CpuStorage, l: &Layout) -> candle_core::Result<&'a [f32]> {
-    match l.contiguous_offsets() {
-        Some((a, b)) => Ok(&s.as_slice::<f32>()?[a..b]),
-        None => candle_core::bail!("fused-mlp: expects contiguous f32 tensors"),
-    }
-}
-
 impl CustomOp2 for FusedMlp {
     fn name(&self) -> &'static str {
         "fused-mlp"
@@ -228,7 +222,7 @@ impl CustomOp2 for FusedMlp {
         s2: &CpuStorage,
         l2: &Layout,
     ) -> candle_core::Result<(CpuStorage, Shape)> {
-        let (x, theta) = (slice(s1, l1)?, slice(s2, l2)?);
+        let (x, theta) = (contiguous_f32(s1, l1, self.name())?, contiguous_f32(s2, l2, self.name())?);
         let dims = l1.dims();
         if dims.len() != 2 || dims[1] != self.sizes[0] {
             candle_core::bail!("fused-mlp: input shape {dims:?}, expected (batch, {})", self.sizes[0]);
