@@ -32,7 +32,7 @@ impl CustomOp1 for EluForward {
         let mut y = vec![0f32; x.len()];
         y.par_chunks_mut(CHUNK).zip(x.par_chunks(CHUNK)).for_each(|(y, x)| {
             for (y, &x) in y.iter_mut().zip(x) {
-                *y = if x > 0.0 { x } else { super::fused::fast_expm1(x) };
+                *y = super::fused::elu(x);
             }
         });
         Ok((CpuStorage::F32(y), l.shape().clone()))

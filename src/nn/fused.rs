@@ -29,58 +29,69 @@ const ROW_BLOCK: usize = 256;
 #[inline(always)]
 fn fast_exp(x: f32) -> f32 {
     let x = x.clamp(-87.0, 88.0);
-    // Round to nearest by the 1.5 * 2^23 trick (no libm call, so the loop vectorises).
-    let n = (x * std::f32::consts::LOG2_E + 12_582_912.0) - 12_582_912.0;
+    // Round to nearest by the 1.5 * 2^23 trick (no libm call, so the loop vectorises):
+    // the low mantissa bits of `biased` hold n itself, read without a (saturating,
+    // hence scalar) float-to-int cast.
+    let biased = x * std::f32::consts::LOG2_E + 12_582_912.0;
+    let n = biased - 12_582_912.0;
+    let n_int = biased.to_bits().wrapping_sub(12_582_912f32.to_bits()) as i32;
     let r = x - n * 0.693_145_75 - n * 1.428_606_8e-6;
     let p = 1.0
         + r * (1.0 + r * (0.5 + r * (0.166_666_67 + r * (0.041_666_668 + r * (0.008_333_334 + r * 0.001_388_889)))));
-    f32::from_bits(((n as i32 + 127) << 23) as u32) * p
+    f32::from_bits((n_int.wrapping_add(127) << 23) as u32) * p
 }
 
-/// e^x - 1, accurate near 0 (Taylor below |x| < 0.125).
+/// e^x - 1, accurate near 0 (Taylor below |x| < 0.125). Both branches are
+/// computed and one is selected, so loops over it vectorise.
 #[inline(always)]
 pub(crate) fn fast_expm1(x: f32) -> f32 {
     let taylor = x * (1.0 + x * (0.5 + x * (0.166_666_67 + x * (0.041_666_668 + x * 0.008_333_334))));
+    let shifted = fast_exp(x) - 1.0;
     if x.abs() < 0.125 {
         taylor
     } else {
-        fast_exp(x) - 1.0
+        shifted
     }
 }
 
-fn activate_in_place(act: Activation, v: &mut [f32]) {
-    v.par_chunks_mut(CHUNK).for_each(|c| match act {
-        Activation::Elu => c.iter_mut().for_each(|v| *v = if *v > 0.0 { *v } else { fast_expm1(*v) }),
-        Activation::Relu => c.iter_mut().for_each(|v| *v = v.max(0.0)),
-        Activation::Tanh => c.iter_mut().for_each(|v| *v = v.tanh()),
-        Activation::Identity => {}
-    });
+/// ELU (alpha 1), branch-free: y = x for x > 0, e^x - 1 otherwise.
+#[inline(always)]
+pub(crate) fn elu(x: f32) -> f32 {
+    let negative = fast_expm1(x);
+    if x > 0.0 {
+        x
+    } else {
+        negative
+    }
 }
 
-/// g <- g * act'(y) where y is the activation's output.
+/// The activation applied in place. One loop per activation (a `match`
+/// inside the loop compiled to a jump per element, not vector code).
+fn activate_in_place(act: Activation, v: &mut [f32]) {
+    match act {
+        Activation::Elu => v.par_chunks_mut(CHUNK).for_each(|c| c.iter_mut().for_each(|v| *v = elu(*v))),
+        Activation::Relu => v.par_chunks_mut(CHUNK).for_each(|c| c.iter_mut().for_each(|v| *v = v.max(0.0))),
+        Activation::Tanh => v.par_chunks_mut(CHUNK).for_each(|c| c.iter_mut().for_each(|v| *v = v.tanh())),
+        Activation::Identity => {}
+    }
+}
+
+/// g <- g * act'(y) where y is the activation's output; one loop per activation, as above.
 fn activation_grad_in_place(act: Activation, g: &mut [f32], y: &[f32]) {
-    g.par_chunks_mut(CHUNK).zip(y.par_chunks(CHUNK)).for_each(|(g, y)| {
-        for (g, &y) in g.iter_mut().zip(y) {
-            *g *= match act {
-                Activation::Elu => {
-                    if y > 0.0 {
-                        1.0
-                    } else {
-                        y + 1.0
-                    }
-                }
-                Activation::Relu => {
-                    if y > 0.0 {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                }
-                Activation::Tanh => 1.0 - y * y,
-                Activation::Identity => 1.0,
-            };
-        }
-    });
+    fn apply(g: &mut [f32], y: &[f32], derivative: impl Fn(f32) -> f32 + Sync) {
+        g.par_chunks_mut(CHUNK).zip(y.par_chunks(CHUNK)).for_each(|(g, y)| {
+            for (g, &y) in g.iter_mut().zip(y) {
+                *g *= derivative(y);
+            }
+        });
+    }
+    match act {
+        // ELU: 1 for y > 0, y + 1 otherwise (y = e^x - 1).
+        Activation::Elu => apply(g, y, |y| if y > 0.0 { 1.0 } else { y + 1.0 }),
+        Activation::Relu => apply(g, y, |y| if y > 0.0 { 1.0 } else { 0.0 }),
+        Activation::Tanh => apply(g, y, |y| 1.0 - y * y),
+        Activation::Identity => {}
+    }
 }
 
 fn parallelism() -> Parallelism {
@@ -104,6 +115,7 @@ fn matmul(
     b: &[f32],
     b_cs: usize,
     b_rs: usize,
+    par: Parallelism,
 ) {
     assert!(dst.len() >= m * n);
     // SAFETY: the strides describe in-bounds (m, k) and (k, n) views of `a` and `b`
@@ -128,7 +140,7 @@ fn matmul(
             false,
             false,
             false,
-            parallelism(),
+            par,
         )
     }
 }
@@ -178,7 +190,7 @@ impl FusedMlp {
             z.par_chunks_mut(width * ROW_BLOCK)
                 .for_each(|rows| rows.chunks_mut(width).for_each(|r| r.copy_from_slice(bias)));
             // z (batch, width) += h (batch, fan_in) . W^T, W (width, fan_in) row-major.
-            matmul(batch, width, fan_in, &mut z, true, h, 1, fan_in, &theta[w_at..], fan_in, 1);
+            matmul(batch, width, fan_in, &mut z, true, h, 1, fan_in, &theta[w_at..], fan_in, 1, parallelism());
             if l < last {
                 activate_in_place(self.activation, &mut z);
                 hidden.push(z);
@@ -262,37 +274,32 @@ impl CustomOp2 for FusedMlp {
                 activation_grad_in_place(self.activation, &mut g, &hidden[l]);
             }
             let h: &[f32] = if l == 0 { x } else { &hidden[l - 1] };
-            // dW (width, fan_in) = g^T (width, batch) . h (batch, fan_in).
-            matmul(
-                width,
-                fan_in,
-                batch,
-                &mut grad_theta[w_at..w_at + width * fan_in],
-                false,
-                &g,
-                width,
-                1,
-                h,
-                1,
-                fan_in,
-            );
-            let partial: Vec<Vec<f32>> = g
-                .par_chunks(width * ROW_BLOCK)
-                .map(|rows| {
+            let need_prev = l > 0 || need_x;
+            let (dw, db) = grad_theta[w_at..b_at + width].split_at_mut(width * fan_in);
+            let g_now = &g;
+            // dW and db, then (when needed) g_prev: two independent products, each on
+            // one thread when both run, so small layers keep both cores busy.
+            let mut weight_and_bias = |par: Parallelism| {
+                // dW (width, fan_in) = g^T (width, batch) . h (batch, fan_in).
+                matmul(width, fan_in, batch, dw, false, g_now, width, 1, h, 1, fan_in, par);
+                // db: column sums of g over fixed row blocks, added in block order.
+                for rows in g_now.chunks(width * ROW_BLOCK) {
                     let mut s = vec![0f32; width];
                     rows.chunks(width).for_each(|r| s.iter_mut().zip(r).for_each(|(s, v)| *s += v));
-                    s
-                })
-                .collect();
-            let db = &mut grad_theta[b_at..b_at + width];
-            for p in &partial {
-                db.iter_mut().zip(p).for_each(|(d, v)| *d += v);
-            }
-            if l > 0 || need_x {
+                    db.iter_mut().zip(&s).for_each(|(d, v)| *d += v);
+                }
+            };
+            let previous = |par: Parallelism| {
                 // g_prev (batch, fan_in) = g (batch, width) . W (width, fan_in).
                 let mut prev = vec![0f32; batch * fan_in];
-                matmul(batch, fan_in, width, &mut prev, false, &g, 1, width, &theta[w_at..], 1, fan_in);
+                matmul(batch, fan_in, width, &mut prev, false, g_now, 1, width, &theta[w_at..], 1, fan_in, par);
+                prev
+            };
+            if need_prev {
+                let ((), prev) = rayon::join(|| weight_and_bias(Parallelism::None), || previous(Parallelism::None));
                 g = prev;
+            } else {
+                weight_and_bias(parallelism());
             }
         }
         let grad_x =
@@ -342,6 +349,20 @@ mod tests {
         let single = run(Parallelism::None);
         assert!(single == run(Parallelism::Rayon(2)), "2 threads differ from 1");
         assert!(single == run(Parallelism::Rayon(3)), "3 threads differ from 1");
+    }
+
+    #[test]
+    fn fast_exp_reads_the_exponent_as_the_float_to_int_cast_did() {
+        for i in 0..200_000 {
+            let x = (-87.0f32 + i as f32 * 0.000_875).min(88.0);
+            let n = (x * std::f32::consts::LOG2_E + 12_582_912.0) - 12_582_912.0;
+            let r = x - n * 0.693_145_75 - n * 1.428_606_8e-6;
+            let p = 1.0
+                + r * (1.0
+                    + r * (0.5 + r * (0.166_666_67 + r * (0.041_666_668 + r * (0.008_333_334 + r * 0.001_388_889)))));
+            let cast = f32::from_bits(((n as i32 + 127) << 23) as u32) * p;
+            assert_eq!(fast_exp(x).to_bits(), cast.to_bits(), "exp({x})");
+        }
     }
 
     #[test]
