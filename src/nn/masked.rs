@@ -21,6 +21,7 @@
 //! log_sigma only during the first E iterations (after that it decays, 2.3).
 
 use super::bitmask::BitMask;
+use super::masked_weight::masked_weight;
 use super::select::{select_mask, SelectionParams};
 use super::state::{ElementState, TaskId};
 use super::Param;
@@ -334,20 +335,25 @@ impl MaskedLinear {
     }
 
     /// The training effective weight W * M_ste (out, in) and the current bias (out,), both differentiable.
+    /// The straight-through estimator (M taken as S = mu + sigma * eps) is [`masked_weight`]'s backward.
     pub fn training_weight(&self) -> anyhow::Result<(Tensor, Tensor)> {
+        self.effective_training_weight(true)
+    }
+
+    /// [`Self::training_weight`], differentiable only when `track` is true.
+    pub(crate) fn effective_training_weight(&self, track: bool) -> anyhow::Result<(Tensor, Tensor)> {
         let t = self.training_ready()?;
         let mask = t.mask.as_ref().expect("checked by training_ready");
-        let weight = self.weight.as_tensor();
-        let effective = match &t.noise {
-            Some(eps) => {
-                let sample =
-                    self.score_mean.as_tensor().add(&eps.broadcast_mul(&self.log_sigma.as_tensor().exp()?)?)?;
-                let straight_through = mask.add(&sample.sub(&sample.detach())?)?;
-                weight.mul(&straight_through)?
-            }
-            None => weight.mul(mask)?,
-        };
-        Ok((effective, t.bias.as_tensor().clone()))
+        let effective = masked_weight(
+            self.weight.as_tensor(),
+            self.score_mean.as_tensor(),
+            self.log_sigma.as_tensor(),
+            mask,
+            t.noise.as_ref(),
+            track,
+        )?;
+        let bias = if track { t.bias.as_tensor().clone() } else { t.bias.as_tensor().detach() };
+        Ok((effective, bias))
     }
 
     /// Training forward with the current task's hard mask (batch, in) -> (batch, out), differentiable.

@@ -18,6 +18,7 @@ pub mod checkpoint;
 mod element_view;
 mod fused;
 mod masked;
+mod masked_weight;
 mod mlp;
 mod optim;
 mod select;
