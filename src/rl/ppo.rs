@@ -13,7 +13,7 @@
 //! Metrics are namespaced as in CleanRL: `charts/*`, `losses/*`, `time/*`.
 
 use super::agent::{matrix, normal_tensor, Agent};
-use super::cenet_loss::{cenet_loss, reparameterize};
+use super::cenet_loss::{cenet_loss, reparameterize, CenetLoss};
 use super::env::{EpisodeSummary, TrainEnv};
 use super::losses::{
     adapt_learning_rate, clip_fraction, clipped_surrogate_loss, gaussian_entropy, gaussian_kl, gaussian_log_prob,
@@ -23,6 +23,7 @@ use super::metrics::{names, Metrics};
 use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, RolloutRow};
 use crate::config::PpoConfig;
 use crate::nn::{AdamConfig, MaskedAdam};
+use candle_core::backprop::GradStore;
 use candle_core::{Device, Tensor};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -206,47 +207,55 @@ impl PpoLearner {
                     advantages = normalize_advantages(&advantages)?;
                 }
 
-                // Policy: the new means under the rollout's context.
-                let means = self.agent.action_mean(&obs, &context)?;
-                let log_std = self.agent.log_std.as_tensor();
+                // CENet noise first, from the learner's stream (the branches below run in parallel).
+                let latent_noise = if self.agent.use_cenet {
+                    Some(normal_tensor(&mut self.rng, indices.len(), self.agent.latent_dim)?)
+                } else {
+                    None
+                };
+                let agent = &self.agent;
+                let optimizer = &mut self.optimizer;
 
-                // Adaptive learning rate from KL(rollout policy || current policy).
-                let kl = f64::from(
-                    gaussian_kl(&old_means, &rollout_log_std, &means.detach(), &log_std.detach())?
-                        .to_scalar::<f32>()?,
-                );
-                if cfg.adaptive_lr {
-                    let lr = adapt_learning_rate(
-                        self.optimizer.learning_rate(),
-                        kl,
-                        cfg.desired_kl,
-                        cfg.lr_factor,
-                        cfg.min_lr,
-                        cfg.max_lr,
+                // Each network's loss term depends on its own parameters only (the actor's
+                // context input is detached), so the gradient of the summed loss is the
+                // union of the three branches' gradients: actor (with log_std), critic,
+                // CENet, each forward and backward on its own thread.
+                let actor_branch = || -> anyhow::Result<ActorTerms> {
+                    // Policy: the new means under the rollout's context.
+                    let means = agent.action_mean(&obs, &context)?;
+                    let log_std = agent.log_std.as_tensor();
+                    // KL(rollout policy || current policy), for the adaptive learning rate.
+                    let kl = f64::from(
+                        gaussian_kl(&old_means, &rollout_log_std, &means.detach(), &log_std.detach())?
+                            .to_scalar::<f32>()?,
                     );
-                    self.optimizer.set_learning_rate(lr);
-                }
-
-                let new_log_probs = gaussian_log_prob(&actions, &means, log_std)?;
-                let policy_loss = clipped_surrogate_loss(&new_log_probs, &old_log_probs, &advantages, cfg.clip_ratio)?;
-                let entropy = gaussian_entropy(log_std)?;
-
-                // Critic on the privileged observation.
-                let values = self.agent.value(&rows(&b.privileged_obs, d.privileged_obs)?)?;
-                let clip = cfg.clip_value_loss.then_some(cfg.clip_ratio);
-                let critic_loss = value_loss(&values, &old_values, &returns, clip)?;
-
-                let mut loss = policy_loss
-                    .add(&critic_loss.affine(cfg.value_loss_coef, 0.0)?)?
-                    .sub(&entropy.affine(cfg.entropy_coef, 0.0)?)?;
-
-                // CENet: beta-VAE on the history, velocity target, next observation.
-                if self.agent.use_cenet {
+                    let new_log_probs = gaussian_log_prob(&actions, &means, log_std)?;
+                    let policy_loss =
+                        clipped_surrogate_loss(&new_log_probs, &old_log_probs, &advantages, cfg.clip_ratio)?;
+                    let entropy = gaussian_entropy(log_std)?;
+                    // The masks' soft-score entropy term (METHOD 2.3; 0 after E iterations).
+                    let soft_score = agent.actor.soft_score_loss()?;
+                    let loss = policy_loss.sub(&entropy.affine(cfg.entropy_coef, 0.0)?)?.add(&soft_score)?;
+                    let grads = loss.backward()?;
+                    let clipfrac = f64::from(clip_fraction(&new_log_probs, &old_log_probs, cfg.clip_ratio)?);
+                    Ok(ActorTerms { kl, policy_loss, entropy, soft_score, clipfrac, grads })
+                };
+                let critic_branch = || -> anyhow::Result<(Tensor, Tensor, GradStore)> {
+                    // Critic on the privileged observation.
+                    let values = agent.value(&rows(&b.privileged_obs, d.privileged_obs)?)?;
+                    let clip = cfg.clip_value_loss.then_some(cfg.clip_ratio);
+                    let critic_loss = value_loss(&values, &old_values, &returns, clip)?;
+                    let soft_score = agent.critic.soft_score_loss()?;
+                    let grads = critic_loss.affine(cfg.value_loss_coef, 0.0)?.add(&soft_score)?.backward()?;
+                    Ok((critic_loss, soft_score, grads))
+                };
+                let cenet_branch = || -> anyhow::Result<Option<(CenetLoss, Tensor, GradStore)>> {
+                    let Some(noise) = &latent_noise else { return Ok(None) };
+                    // CENet: beta-VAE on the history, velocity target, next observation.
                     let history = rows(&b.obs_history, d.obs_history)?;
-                    let estimate = self.agent.estimate(&history)?;
-                    let noise = normal_tensor(&mut self.rng, indices.len(), self.agent.latent_dim)?;
-                    let z = reparameterize(&estimate.latent_mean, &estimate.latent_logvar, &noise)?;
-                    let reconstruction = self.agent.decode(&Tensor::cat(&[&estimate.velocity, &z], 1)?)?;
+                    let estimate = agent.estimate(&history)?;
+                    let z = reparameterize(&estimate.latent_mean, &estimate.latent_logvar, noise)?;
+                    let reconstruction = agent.decode(&Tensor::cat(&[&estimate.velocity, &z], 1)?)?;
                     let cenet = cenet_loss(
                         &estimate,
                         &rows(&b.base_velocity, 3)?,
@@ -254,34 +263,53 @@ impl PpoLearner {
                         &rows(&b.next_obs, d.obs)?,
                         cfg.cenet_beta,
                     )?;
-                    loss = loss.add(&cenet.total.affine(cfg.cenet_loss_coef, 0.0)?)?;
+                    let soft_score = agent.encoder.soft_score_loss()?.add(&agent.decoder.soft_score_loss()?)?;
+                    let grads = cenet.total.affine(cfg.cenet_loss_coef, 0.0)?.add(&soft_score)?.backward()?;
+                    Ok(Some((cenet, soft_score, grads)))
+                };
+                let (actor, (critic, cenet)) = rayon::join(actor_branch, || rayon::join(critic_branch, cenet_branch));
+                let (actor, (critic_loss, critic_soft_score, critic_grads)) = (actor?, critic?);
+                let mut grads = actor.grads;
+                grads.extend(critic_grads)?;
+                let mut soft_score = actor.soft_score.add(&critic_soft_score)?;
+                if let Some((cenet, cenet_soft_score, cenet_grads)) = cenet? {
+                    grads.extend(cenet_grads)?;
+                    soft_score = soft_score.add(&cenet_soft_score)?;
                     add(&mut sums, "losses/cenet_velocity", &cenet.velocity_mse)?;
                     add(&mut sums, "losses/cenet_reconstruction", &cenet.reconstruction_mse)?;
                     add(&mut sums, "losses/cenet_kl", &cenet.kl)?;
                 }
+                add(&mut sums, "losses/soft_score", &soft_score)?;
 
-                // The masks' soft-score entropy term (METHOD 2.3; 0 after E iterations).
-                let soft_score_loss = self.agent.soft_score_loss()?;
-                loss = loss.add(&soft_score_loss)?;
-                add(&mut sums, "losses/soft_score", &soft_score_loss)?;
+                // The learning rate adapts to this minibatch's KL before its step (legged_gym).
+                let kl = actor.kl;
+                if cfg.adaptive_lr {
+                    let lr = adapt_learning_rate(
+                        optimizer.learning_rate(),
+                        kl,
+                        cfg.desired_kl,
+                        cfg.lr_factor,
+                        cfg.min_lr,
+                        cfg.max_lr,
+                    );
+                    optimizer.set_learning_rate(lr);
+                }
 
                 // Clip the global norm of the networks' gradients. The soft-score
                 // sigmas ("{layer}.log_sigma") are left out: their entropy gradient
                 // (beta_H * n on log_sigma, over 10 for a 512x256 layer at beta_H 1e-4)
                 // would otherwise swamp the norm and shrink every PPO gradient; Adam is
                 // per-element scale-free, so log_sigma needs no clipping.
-                let params = self.agent.params();
+                let params = agent.params();
                 let clipped: Vec<_> = params.iter().filter(|p| !p.name.ends_with("sigma")).cloned().collect();
-                let mut grads = loss.backward()?;
-                let grad_norm = self.optimizer.clip_grad_norm(&clipped, &mut grads, cfg.max_grad_norm)?;
-                self.optimizer.step(&params, &grads)?;
+                let grad_norm = optimizer.clip_grad_norm(&clipped, &mut grads, cfg.max_grad_norm)?;
+                optimizer.step(&params, &grads)?;
 
-                add(&mut sums, "losses/policy_loss", &policy_loss)?;
+                add(&mut sums, "losses/policy_loss", &actor.policy_loss)?;
                 add(&mut sums, "losses/value_loss", &critic_loss)?;
-                add(&mut sums, "losses/entropy", &entropy)?;
+                add(&mut sums, "losses/entropy", &actor.entropy)?;
                 *sums.entry("losses/approx_kl".into()).or_default() += kl;
-                *sums.entry("losses/clipfrac".into()).or_default() +=
-                    f64::from(clip_fraction(&new_log_probs, &old_log_probs, cfg.clip_ratio)?);
+                *sums.entry("losses/clipfrac".into()).or_default() += actor.clipfrac;
                 *sums.entry("losses/grad_norm".into()).or_default() += grad_norm;
                 count += 1.0;
             }
@@ -292,6 +320,18 @@ impl PpoLearner {
         m.insert("charts/action_std".into(), f64::from(std));
         Ok(m)
     }
+}
+
+/// What the actor's branch of a minibatch update returns.
+struct ActorTerms {
+    /// KL(rollout policy || current policy) before the step.
+    kl: f64,
+    policy_loss: Tensor,
+    entropy: Tensor,
+    /// The actor's soft-score loss term.
+    soft_score: Tensor,
+    clipfrac: f64,
+    grads: GradStore,
 }
 
 /// Adds a scalar tensor's value to `sums[name]`.
