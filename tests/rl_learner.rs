@@ -84,3 +84,42 @@ fn a_fresh_actor_starts_near_the_default_pose_not_at_a_random_offset() {
         fresh_action_means_max(quadcl::config::PpoConfig { actor_output_init_scale: 1.0, ..Default::default() });
     assert!(plain > 0.5, "without the scale the means reach {plain}; the test no longer shows what the scale is for");
 }
+
+/// Bit patterns of a value list, to compare forwards exactly.
+fn bits(v: &[f32]) -> Vec<u32> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn frozen_acting_weights_give_the_training_forwards_numbers_bit_for_bit() {
+    use candle_core::{Device, Tensor};
+    use rand::SeedableRng;
+    let cfg = small_ppo_config();
+    let env = ToyEnv::new(cfg.ppo.num_envs, 10, 3);
+    let mut agent = Agent::new(env.dims(), &cfg, 3).unwrap();
+    agent.begin_task(0, &[]).unwrap();
+    agent.begin_iteration(0, &mut rand_chacha::ChaCha8Rng::seed_from_u64(5)).unwrap();
+    let d = env.dims();
+    let n = cfg.ppo.num_envs;
+    let privileged = agent.normalize_privileged(env.privileged_observations());
+    for recall in [false, true] {
+        let weights = agent.acting_weights().unwrap();
+        // The critic: the differentiable forward the update uses against the frozen one.
+        let x = Tensor::from_vec(privileged.clone(), (n, d.privileged_obs), &Device::Cpu).unwrap();
+        let tracked = agent.value(&x).unwrap().to_vec1::<f32>().unwrap();
+        assert_eq!(bits(&tracked), bits(&agent.values_with(&weights, &privileged).unwrap()), "recall {recall}");
+        // The actor with its CENet context: fresh weights each call against one frozen set.
+        let fresh = agent.act_deterministic(env.observations(), env.obs_histories()).unwrap();
+        let frozen = agent.act_deterministic_with(&weights, env.observations(), env.obs_histories()).unwrap();
+        assert_eq!(bits(&fresh), bits(&frozen), "recall {recall}");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let (obs, history) = (agent.normalize_obs(env.observations()), agent.normalize_obs(env.obs_histories()));
+        let sampled = agent.act(&obs, &history, &mut rng).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let sampled_frozen = agent.act_with(&weights, &obs, &history, &mut rng).unwrap();
+        assert_eq!(bits(&sampled.actions), bits(&sampled_frozen.actions), "recall {recall}");
+        if !recall {
+            agent.end_task(&mut rand_chacha::ChaCha8Rng::seed_from_u64(6)).unwrap();
+        }
+    }
+}

@@ -15,6 +15,14 @@ use candle_core::Tensor;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// A network's effective weights at one moment, detached (see [`MaskedMlp::frozen_weights`]).
+#[derive(Debug, Clone)]
+pub struct FrozenWeights {
+    network: String,
+    /// (sum over layers of out * in + out,): the fused op's theta.
+    theta: Tensor,
+}
+
 /// A multi-layer perceptron of masked layers sharing one task life cycle.
 #[derive(Debug)]
 pub struct MaskedMlp {
@@ -148,8 +156,18 @@ impl MaskedMlp {
         (weight > 0.0).then(|| sum / weight)
     }
 
-    /// Concatenates every layer's (weight, bias) into the fused op's theta and runs it.
-    fn run(&self, x: &Tensor, weights: Vec<(Tensor, Tensor)>, track: bool) -> anyhow::Result<Tensor> {
+    /// Every layer's (weight, bias) concatenated in layer order: the fused op's theta.
+    fn theta(weights: Vec<(Tensor, Tensor)>) -> anyhow::Result<Tensor> {
+        let mut parts = Vec::with_capacity(2 * weights.len());
+        for (w, b) in weights {
+            parts.push(w.flatten_all()?);
+            parts.push(b);
+        }
+        Ok(Tensor::cat(&parts, 0)?)
+    }
+
+    /// Runs the fused op on `theta` (see [`Self::theta`]).
+    fn run_theta(&self, x: &Tensor, theta: &Tensor, track: bool) -> anyhow::Result<Tensor> {
         let dims = x.dims();
         anyhow::ensure!(
             dims.len() == 2 && dims[1] == self.sizes[0],
@@ -157,13 +175,28 @@ impl MaskedMlp {
             self.name,
             self.sizes[0]
         );
-        let mut parts = Vec::with_capacity(2 * weights.len());
-        for (w, b) in weights {
-            parts.push(w.flatten_all()?);
-            parts.push(b);
-        }
-        let theta = Tensor::cat(&parts, 0)?;
-        Ok(fused_mlp(&self.sizes, self.activation, x, &theta, track)?)
+        Ok(fused_mlp(&self.sizes, self.activation, x, theta, track)?)
+    }
+
+    fn run(&self, x: &Tensor, weights: Vec<(Tensor, Tensor)>, track: bool) -> anyhow::Result<Tensor> {
+        self.run_theta(x, &Self::theta(weights)?, track)
+    }
+
+    /// The weights [`Self::forward_no_grad`] uses (this iteration's masks), or with `task`
+    /// those of [`Self::forward_task`], as one detached tensor to run many batches with
+    /// [`Self::forward_weights`] while nothing trains (a rollout, an evaluation).
+    pub fn frozen_weights(&self, task: Option<TaskId>) -> anyhow::Result<FrozenWeights> {
+        let weights = match task {
+            Some(task) => self.layers.iter().map(|l| l.recall_weight(task)).collect::<anyhow::Result<_>>()?,
+            None => self.layers.iter().map(|l| l.effective_training_weight(false)).collect::<anyhow::Result<_>>()?,
+        };
+        Ok(FrozenWeights { network: self.name.clone(), theta: Self::theta(weights)?.detach() })
+    }
+
+    /// The forward with weights from [`Self::frozen_weights`]: the same values, no gradient.
+    pub fn forward_weights(&self, weights: &FrozenWeights, x: &Tensor) -> anyhow::Result<Tensor> {
+        anyhow::ensure!(weights.network == self.name, "weights of {} given to network {}", weights.network, self.name);
+        self.run_theta(x, &weights.theta, false)
     }
 
     /// Training forward with the current task's masks, (batch, in) -> (batch, out), differentiable.

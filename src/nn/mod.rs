@@ -31,7 +31,7 @@ pub use checkpoint::{load_policy, save_policy, Policy};
 pub use element_view::{mask_views, transfer_lift, ElementView, LayerLift, LayerView};
 pub use fused::fused_mlp;
 pub use masked::MaskedLinear;
-pub use mlp::MaskedMlp;
+pub use mlp::{FrozenWeights, MaskedMlp};
 pub use optim::{AdamConfig, MaskedAdam};
 pub use select::row_quota;
 pub use state::{ElementState, IllegalTransition, TaskId};

@@ -44,8 +44,9 @@ pub fn evaluate(
     let n = env.num_envs();
     let mut first: Vec<Option<EpisodeSummary>> = vec![None; n];
     let mut done = 0;
+    let weights = agent.acting_weights()?;
     for _ in 0..max_steps {
-        let actions = agent.act_deterministic(env.observations(), env.obs_histories())?;
+        let actions = agent.act_deterministic_with(&weights, env.observations(), env.obs_histories())?;
         let step = env.step(&actions)?;
         for episode in step.finished {
             anyhow::ensure!(episode.env < n, "episode from env {} of {n}", episode.env);

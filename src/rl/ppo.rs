@@ -112,6 +112,8 @@ impl PpoLearner {
         self.buffer.clear();
         self.rollout_log_std = Some(self.agent.log_std.as_tensor().copy()?);
         let (mut env_s, mut policy_s) = (0.0f64, 0.0f64);
+        // Nothing trains during the rollout: the effective weights are made once.
+        let weights = self.agent.acting_weights()?;
         for _ in 0..self.cfg.steps_per_env {
             let policy_start = Instant::now();
             let raw_privileged = env.privileged_observations().to_vec();
@@ -119,8 +121,8 @@ impl PpoLearner {
             let obs = self.agent.normalize_obs(env.observations());
             let history = self.agent.normalize_obs(env.obs_histories());
             let privileged = self.agent.normalize_privileged(&raw_privileged);
-            let act = self.agent.act(&obs, &history, &mut self.rng)?;
-            let values = self.agent.values(&privileged)?;
+            let act = self.agent.act_with(&weights, &obs, &history, &mut self.rng)?;
+            let values = self.agent.values_with(&weights, &privileged)?;
             let base_velocity = self.agent.base_velocity(&raw_privileged);
             policy_s += policy_start.elapsed().as_secs_f64();
 
@@ -156,7 +158,8 @@ impl PpoLearner {
                 self.recent_episodes.push_back(episode);
             }
         }
-        let last_values = self.agent.values(&self.agent.normalize_privileged(env.privileged_observations()))?;
+        let last_values =
+            self.agent.values_with(&weights, &self.agent.normalize_privileged(env.privileged_observations()))?;
         self.buffer.compute_returns(&last_values, self.cfg.gamma as f32, self.cfg.gae_lambda as f32)?;
 
         let mut m = Metrics::new();
