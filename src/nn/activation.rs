@@ -20,6 +20,15 @@ pub(super) fn contiguous_f32<'a>(s: &'a CpuStorage, l: &Layout, op: &str) -> can
     }
 }
 
+/// Runs `f` on the contiguous f32 contents of a CPU tensor, without copying them.
+pub(super) fn with_f32_slice<R>(t: &Tensor, what: &str, f: impl FnOnce(&[f32]) -> R) -> candle_core::Result<R> {
+    let (storage, layout) = t.storage_and_layout();
+    match &*storage {
+        candle_core::Storage::Cpu(cpu) => Ok(f(contiguous_f32(cpu, layout, what)?)),
+        _ => candle_core::bail!("{what}: expects a tensor on the CPU"),
+    }
+}
+
 struct EluForward;
 
 impl CustomOp1 for EluForward {

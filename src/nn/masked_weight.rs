@@ -18,8 +18,8 @@
 //! below), in one pass each way instead of about five element-wise kernels
 //! and their gradient buffers per layer.
 
-use super::activation::contiguous_f32;
-use candle_core::{CpuStorage, CustomOp3, Layout, Shape, Storage, Tensor};
+use super::activation::{contiguous_f32, with_f32_slice as with_slice};
+use candle_core::{CpuStorage, CustomOp3, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
 /// Elements per rayon task (and per partial sum of d log sigma).
@@ -29,15 +29,6 @@ const CHUNK: usize = 1 << 14;
 struct MaskedWeight {
     mask: Tensor,
     noise: Option<Tensor>,
-}
-
-/// Runs `f` on the contiguous f32 contents of `t` (no copy).
-fn with_slice<R>(t: &Tensor, what: &str, f: impl FnOnce(&[f32]) -> R) -> candle_core::Result<R> {
-    let (storage, layout) = t.storage_and_layout();
-    match &*storage {
-        Storage::Cpu(cpu) => Ok(f(contiguous_f32(cpu, layout, what)?)),
-        _ => candle_core::bail!("masked-weight: {what} must be on the CPU"),
-    }
 }
 
 impl CustomOp3 for MaskedWeight {

@@ -4,9 +4,10 @@
 //! frozen element stays bit-identical however many steps run (candle's AdamW
 //! would keep moving it through momentum and weight decay).
 //!
-//! The update is element-wise (rayon over chunks), so the result does not
+//! The update is element-wise (rayon over parameters), so the result does not
 //! depend on the number of threads.
 
+use super::activation::with_f32_slice;
 use super::masked::var_values;
 use super::Param;
 use candle_core::backprop::GradStore;
@@ -51,19 +52,21 @@ pub struct MaskedAdam {
     moments: HashMap<String, Moments>,
 }
 
-const CHUNK: usize = 1 << 13;
-
-/// A parameter's gradient and update mask as flat vectors.
-type GradAndMask = (Vec<f32>, Option<Vec<f32>>);
-
-fn grad_and_mask(p: &Param, grads: &GradStore) -> anyhow::Result<Option<GradAndMask>> {
+/// A parameter's gradient and update mask, read in place; None when it has no gradient.
+fn with_grad_and_mask<R>(
+    p: &Param,
+    grads: &GradStore,
+    f: impl FnOnce(&[f32], Option<&[f32]>) -> R,
+) -> anyhow::Result<Option<R>> {
     let Some(g) = grads.get(p.var.as_tensor()) else { return Ok(None) };
-    let g = g.flatten_all()?.to_vec1::<f32>()?;
-    let m = match &p.update_mask {
-        Some(m) => Some(m.flatten_all()?.to_vec1::<f32>()?),
-        None => None,
-    };
-    Ok(Some((g, m)))
+    let g = g.contiguous()?;
+    Ok(Some(with_f32_slice(&g, &p.name, |g| match &p.update_mask {
+        Some(m) => {
+            let m = m.contiguous()?;
+            with_f32_slice(&m, &p.name, |m| f(g, Some(m)))
+        }
+        None => Ok(f(g, None)),
+    })??))
 }
 
 impl MaskedAdam {
@@ -90,19 +93,21 @@ impl MaskedAdam {
 
     /// Scales all gradients so their global L2 norm is at most `max_norm`. The norm counts only
     /// elements that may move (update mask 1); it is returned as it was before clipping.
+    /// Each parameter's square sum is taken in element order, and the sums in parameter order,
+    /// so the norm does not depend on the thread count.
     pub fn clip_grad_norm(&self, params: &[Param], grads: &mut GradStore, max_norm: f64) -> anyhow::Result<f64> {
-        let mut sq = 0f64;
-        for p in params {
-            if let Some((g, m)) = grad_and_mask(p, grads)? {
-                sq += match m {
+        let square_sums = params
+            .par_iter()
+            .map(|p| {
+                with_grad_and_mask(p, grads, |g, m| match m {
                     Some(m) => {
-                        g.iter().zip(&m).map(|(g, m)| if *m != 0.0 { (*g as f64).powi(2) } else { 0.0 }).sum::<f64>()
+                        g.iter().zip(m).map(|(g, m)| if *m != 0.0 { (*g as f64).powi(2) } else { 0.0 }).sum::<f64>()
                     }
                     None => g.iter().map(|g| (*g as f64).powi(2)).sum::<f64>(),
-                };
-            }
-        }
-        let norm = sq.sqrt();
+                })
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let norm = square_sums.into_iter().flatten().sum::<f64>().sqrt();
         if norm > max_norm && norm.is_finite() {
             let scale = max_norm / (norm + 1e-6);
             for p in params {
@@ -115,51 +120,61 @@ impl MaskedAdam {
         Ok(norm)
     }
 
-    /// One Adam step on every parameter that has a gradient.
+    /// One Adam step on every parameter that has a gradient (the parameters in parallel).
     pub fn step(&mut self, params: &[Param], grads: &GradStore) -> anyhow::Result<()> {
         let c = self.cfg.clone();
         for p in params {
-            let Some((g, mask)) = grad_and_mask(p, grads)? else { continue };
+            if grads.get(p.var.as_tensor()).is_some() {
+                let n = p.var.as_tensor().elem_count();
+                let mom = self.moments.entry(p.name.clone()).or_insert_with(|| Moments {
+                    m: vec![0.0; n],
+                    v: vec![0.0; n],
+                    step: 0,
+                });
+                anyhow::ensure!(mom.m.len() == n, "{}: parameter changed size between steps", p.name);
+            }
+        }
+        // One moment entry per parameter with a gradient, handed out as disjoint borrows.
+        let mut by_name: HashMap<&str, &mut Moments> = self.moments.iter_mut().map(|(k, v)| (k.as_str(), v)).collect();
+        let work: Vec<(&Param, &mut Moments)> = params
+            .iter()
+            .filter(|p| grads.get(p.var.as_tensor()).is_some())
+            .filter_map(|p| by_name.remove(p.name.as_str()).map(|m| (p, m)))
+            .collect();
+        work.into_par_iter().try_for_each(|(p, mom)| -> anyhow::Result<()> {
             let mut w = var_values(&p.var)?;
-            anyhow::ensure!(g.len() == w.len(), "{}: gradient has {} elements, parameter {}", p.name, g.len(), w.len());
-            let mom = self.moments.entry(p.name.clone()).or_insert_with(|| Moments {
-                m: vec![0.0; w.len()],
-                v: vec![0.0; w.len()],
-                step: 0,
-            });
-            anyhow::ensure!(mom.m.len() == w.len(), "{}: parameter changed size between steps", p.name);
             mom.step += 1;
             let (b1, b2) = (c.beta1 as f32, c.beta2 as f32);
             let step_size = (c.learning_rate / (1.0 - c.beta1.powi(mom.step))) as f32;
             let bc2_sqrt = (1.0 - c.beta2.powi(mom.step)).sqrt() as f32;
             let (eps, decay) = (c.eps as f32, (c.learning_rate * c.weight_decay) as f32);
-            let ones;
-            let mask = match &mask {
-                Some(m) => m.as_slice(),
-                None => {
-                    ones = vec![1.0f32; w.len()];
-                    ones.as_slice()
-                }
-            };
-            w.par_chunks_mut(CHUNK)
-                .zip(mom.m.par_chunks_mut(CHUNK))
-                .zip(mom.v.par_chunks_mut(CHUNK))
-                .zip(g.par_chunks(CHUNK).zip(mask.par_chunks(CHUNK)))
-                .for_each(|(((w, m), v), (g, mask))| {
-                    for i in 0..w.len() {
-                        if mask[i] == 0.0 {
-                            continue;
-                        }
-                        m[i] = b1 * m[i] + (1.0 - b1) * g[i];
-                        v[i] = b2 * v[i] + (1.0 - b2) * g[i] * g[i];
-                        w[i] -= decay * w[i];
-                        w[i] -= step_size * m[i] / (v[i].sqrt() / bc2_sqrt + eps);
+            with_grad_and_mask(p, grads, |g, mask| -> anyhow::Result<()> {
+                anyhow::ensure!(
+                    g.len() == w.len(),
+                    "{}: gradient has {} elements, parameter {}",
+                    p.name,
+                    g.len(),
+                    w.len()
+                );
+                let update = |i: usize, w: &mut [f32], m: &mut [f32], v: &mut [f32]| {
+                    m[i] = b1 * m[i] + (1.0 - b1) * g[i];
+                    v[i] = b2 * v[i] + (1.0 - b2) * g[i] * g[i];
+                    w[i] -= decay * w[i];
+                    w[i] -= step_size * m[i] / (v[i].sqrt() / bc2_sqrt + eps);
+                };
+                for i in 0..w.len() {
+                    // A frozen element, its moments included, is not touched (METHOD 2.2).
+                    if mask.is_none_or(|m| m[i] != 0.0) {
+                        update(i, &mut w, &mut mom.m, &mut mom.v);
                     }
-                });
+                }
+                Ok(())
+            })?
+            .transpose()?;
             let shape = p.var.as_tensor().dims().to_vec();
             p.var.set(&Tensor::from_vec(w, shape, p.var.device())?)?;
-        }
-        Ok(())
+            Ok(())
+        })
     }
 }
 
