@@ -10,7 +10,7 @@ pub struct BenchArgs {
     /// Seconds to spend on each measurement.
     #[arg(long, default_value_t = 2.0)]
     pub seconds: f64,
-    /// Only these sections (comma-separated: env, nn, record, tui); all by default.
+    /// Only these sections (comma-separated: env, nn, ppo, record, tui); all by default.
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<String>,
 }
@@ -21,7 +21,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         "--seconds must be a finite number > 0, got {}",
         args.seconds
     );
-    const SECTIONS: [&str; 4] = ["env", "nn", "record", "tui"];
+    const SECTIONS: [&str; 5] = ["env", "nn", "ppo", "record", "tui"];
     if let Some(bad) = args.only.iter().find(|s| !SECTIONS.contains(&s.as_str())) {
         anyhow::bail!("--only: unknown section {bad:?} (sections: {})", SECTIONS.join(", "));
     }
@@ -32,6 +32,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     }
     if wanted("nn") {
         crate::bench::nn::measure(args.seconds, &mut report)?;
+        crate::bench::gemm::measure(args.seconds, &mut report)?;
+    }
+    if wanted("ppo") {
+        crate::bench::ppo::measure(args.seconds, None, &mut report)?;
     }
     if wanted("record") {
         crate::bench::record::measure(args.seconds, &mut report)?;
