@@ -156,16 +156,27 @@ impl MaskedAdam {
                     g.len(),
                     w.len()
                 );
-                let update = |i: usize, w: &mut [f32], m: &mut [f32], v: &mut [f32]| {
-                    m[i] = b1 * m[i] + (1.0 - b1) * g[i];
-                    v[i] = b2 * v[i] + (1.0 - b2) * g[i] * g[i];
-                    w[i] -= decay * w[i];
-                    w[i] -= step_size * m[i] / (v[i].sqrt() / bc2_sqrt + eps);
+                // One element's step: (w, m, v) after it. A frozen element, its moments
+                // included, keeps its bits (METHOD 2.2): the step is computed and discarded,
+                // a select rather than a branch, so the loop is vector code.
+                let stepped = |w: f32, m: f32, v: f32, g: f32| {
+                    let m = b1 * m + (1.0 - b1) * g;
+                    let v = b2 * v + (1.0 - b2) * g * g;
+                    let w = w - decay * w;
+                    (w - step_size * m / (v.sqrt() / bc2_sqrt + eps), m, v)
                 };
-                for i in 0..w.len() {
-                    // A frozen element, its moments included, is not touched (METHOD 2.2).
-                    if mask.is_none_or(|m| m[i] != 0.0) {
-                        update(i, &mut w, &mut mom.m, &mut mom.v);
+                let elements = w.iter_mut().zip(mom.m.iter_mut()).zip(mom.v.iter_mut()).zip(g);
+                match mask {
+                    Some(mask) => {
+                        for ((((w, m), v), &g), frozen) in elements.zip(mask.iter().map(|k| *k == 0.0)) {
+                            let (w1, m1, v1) = stepped(*w, *m, *v, g);
+                            (*w, *m, *v) = if frozen { (*w, *m, *v) } else { (w1, m1, v1) };
+                        }
+                    }
+                    None => {
+                        for (((w, m), v), &g) in elements {
+                            (*w, *m, *v) = stepped(*w, *m, *v, g);
+                        }
                     }
                 }
                 Ok(())
