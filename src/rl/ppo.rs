@@ -121,8 +121,13 @@ impl PpoLearner {
             let obs = self.agent.normalize_obs(env.observations());
             let history = self.agent.normalize_obs(env.obs_histories());
             let privileged = self.agent.normalize_privileged(&raw_privileged);
-            let act = self.agent.act_with(&weights, &obs, &history, &mut self.rng)?;
-            let values = self.agent.values_with(&weights, &privileged)?;
+            // The policy (encoder, actor) and the critic are independent: one core each.
+            let (agent, rng) = (&self.agent, &mut self.rng);
+            let (act, values) = rayon::join(
+                || agent.act_with(&weights, &obs, &history, rng),
+                || agent.values_with(&weights, &privileged),
+            );
+            let (act, values) = (act?, values?);
             let base_velocity = self.agent.base_velocity(&raw_privileged);
             policy_s += policy_start.elapsed().as_secs_f64();
 
