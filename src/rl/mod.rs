@@ -20,6 +20,7 @@
 //! | `toy_env` | a point-mass [`TrainEnv`] for fast tests of the loop |
 //! | `sim_env` | the simulated quadruped (`sim::VecEnv`) as a [`TrainEnv`] |
 
+mod acting;
 mod agent;
 mod cenet_loss;
 mod env;
@@ -39,7 +40,8 @@ mod test_tensors;
 mod toy_env;
 mod trainer;
 
-pub use agent::{ActOutput, Agent};
+pub use acting::{ActOutput, ActingWeights};
+pub use agent::Agent;
 pub use env::{EnvDims, EpisodeSummary, TrainEnv, VecStep};
 pub use evaluate::{evaluate, EvalReport};
 pub use gait::{record_gait, GaitReport, GaitSummary, HeldCommand};
