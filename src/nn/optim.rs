@@ -69,6 +69,24 @@ fn with_grad_and_mask<R>(
     })??))
 }
 
+/// Lanes of [`square_sum`]: independent accumulators, so the loop is not one long
+/// chain of dependent f64 additions.
+const LANES: usize = 8;
+
+/// Sum of squares in f64 of the elements whose mask is not 0 (all without a mask):
+/// element i goes to lane i mod 8, the lanes are added in order.
+fn square_sum(g: &[f32], mask: Option<&[f32]>) -> f64 {
+    let mut lanes = [0f64; LANES];
+    for (k, chunk) in g.chunks(LANES).enumerate() {
+        for (j, v) in chunk.iter().enumerate() {
+            let moves = mask.is_none_or(|m| m[k * LANES + j] != 0.0);
+            let v = if moves { f64::from(*v) } else { 0.0 };
+            lanes[j] += v * v;
+        }
+    }
+    lanes.iter().sum()
+}
+
 impl MaskedAdam {
     /// A new optimiser with empty moments.
     pub fn new(cfg: AdamConfig) -> Self {
@@ -93,17 +111,15 @@ impl MaskedAdam {
 
     /// Scales all gradients so their global L2 norm is at most `max_norm`. The norm counts only
     /// elements that may move (update mask 1); it is returned as it was before clipping.
-    /// Each parameter's square sum is taken in element order, and the sums in parameter order,
-    /// so the norm does not depend on the thread count.
+    /// Each parameter's square sum is taken in a fixed order ([`square_sum`]), and the sums in
+    /// parameter order, so the norm does not depend on the thread count.
     pub fn clip_grad_norm(&self, params: &[Param], grads: &mut GradStore, max_norm: f64) -> anyhow::Result<f64> {
         let square_sums = params
             .par_iter()
             .map(|p| {
                 with_grad_and_mask(p, grads, |g, m| match m {
-                    Some(m) => {
-                        g.iter().zip(m).map(|(g, m)| if *m != 0.0 { (*g as f64).powi(2) } else { 0.0 }).sum::<f64>()
-                    }
-                    None => g.iter().map(|g| (*g as f64).powi(2)).sum::<f64>(),
+                    Some(m) => square_sum(g, Some(m)),
+                    None => square_sum(g, None),
                 })
             })
             .collect::<anyhow::Result<Vec<_>>>()?;
