@@ -1,5 +1,5 @@
 //! Matrix-product rates for `quadcl bench`: GFLOP/s of the `gemm` kernel the
-//! fused MLP op calls, on the products one PPO minibatch of the base config
+//! fused MLP op calls (`nn::matmul`), on the products one PPO minibatch of the base config
 //! really has (batch 1536 = 3072 transitions / 2 minibatches; the actor's
 //! 64 -> 512 -> 256 -> 128 -> 12 layers), with the fused op's operand layouts:
 //! forward z = h W^T, backward dW = g^T h and g_prev = g W. Plus the
@@ -10,7 +10,8 @@
 //! `gemm_gflops_fwd_128x12`, `gemm_gflops_dw_64x512`; and `gemm_kernel`
 //! (`avx512` when the CPU has AVX-512F, which gemm's `x86-v4` kernels use).
 
-use gemm::{gemm, Parallelism};
+use gemm::Parallelism;
+use quadcl::nn::matmul;
 use serde_json::json;
 use std::time::Instant;
 
@@ -61,33 +62,7 @@ fn rate(p: &Product, seconds: f64, par: Parallelism) -> f64 {
     let a: Vec<f32> = (0..p.m * p.k).map(|i| ((i * 7919) % 1000) as f32 / 1000.0 - 0.5).collect();
     let b: Vec<f32> = (0..p.k * p.n).map(|i| ((i * 104_729) % 997) as f32 / 997.0 - 0.5).collect();
     let mut dst = vec![0f32; p.m * p.n];
-    let mut run = || {
-        // SAFETY: a is (m, k) and b (k, n) under the given strides (the vectors are exactly that
-        // size), and dst is an exclusive (m, n) row-major buffer.
-        unsafe {
-            gemm(
-                p.m,
-                p.n,
-                p.k,
-                dst.as_mut_ptr(),
-                1,
-                p.n as isize,
-                false,
-                a.as_ptr(),
-                p.a.0 as isize,
-                p.a.1 as isize,
-                b.as_ptr(),
-                p.b.0 as isize,
-                p.b.1 as isize,
-                0.0,
-                1.0,
-                false,
-                false,
-                false,
-                par,
-            )
-        }
-    };
+    let mut run = || matmul(p.m, p.n, p.k, &mut dst, false, &a, p.a.0, p.a.1, &b, p.b.0, p.b.1, par);
     run();
     let (start, mut count) = (Instant::now(), 0usize);
     while count < 5 || start.elapsed().as_secs_f64() < seconds {

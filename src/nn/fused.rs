@@ -101,9 +101,11 @@ fn parallelism() -> Parallelism {
     }
 }
 
-/// dst (m, n) row-major = alpha * dst + A B, with A and B given by (pointer, col stride, row stride).
+/// dst (m, n) row-major = (dst if `keep_dst`) + A B, with A (m, k) and B (k, n) given as
+/// slices with their (column stride, row stride): the product the fused op runs, on
+/// `par` threads (gemm's result does not depend on it). Panics if a view is out of bounds.
 #[allow(clippy::too_many_arguments)]
-fn matmul(
+pub fn matmul(
     m: usize,
     n: usize,
     k: usize,
@@ -117,9 +119,13 @@ fn matmul(
     b_rs: usize,
     par: Parallelism,
 ) {
-    assert!(dst.len() >= m * n);
-    // SAFETY: the strides describe in-bounds (m, k) and (k, n) views of `a` and `b`
-    // (asserted by the callers' shapes) and dst is an exclusive (m, n) row-major buffer.
+    // The last element each view reaches must lie inside its slice.
+    let last = |rows: usize, cols: usize, cs: usize, rs: usize| (rows.max(1) - 1) * rs + (cols.max(1) - 1) * cs;
+    assert!(dst.len() >= m * n, "matmul: dst holds {} of {m} x {n}", dst.len());
+    assert!(m * k == 0 || last(m, k, a_cs, a_rs) < a.len(), "matmul: A ({m} x {k}) out of bounds");
+    assert!(k * n == 0 || last(k, n, b_cs, b_rs) < b.len(), "matmul: B ({k} x {n}) out of bounds");
+    // SAFETY: the asserts above keep the (m, k) and (k, n) views of `a` and `b` in bounds,
+    // and dst is an exclusive (m, n) row-major buffer.
     unsafe {
         gemm(
             m,
@@ -321,34 +327,21 @@ mod tests {
         let b: Vec<f32> = (0..k * n).map(|i| ((i * 104729) % 997) as f32 / 997.0 - 0.5).collect();
         let run = |par: Parallelism| {
             let mut dst = vec![0f32; m * n];
-            unsafe {
-                gemm(
-                    m,
-                    n,
-                    k,
-                    dst.as_mut_ptr(),
-                    1,
-                    n as isize,
-                    false,
-                    a.as_ptr(),
-                    1,
-                    k as isize,
-                    b.as_ptr(),
-                    1,
-                    n as isize,
-                    0.0,
-                    1.0,
-                    false,
-                    false,
-                    false,
-                    par,
-                )
-            };
+            matmul(m, n, k, &mut dst, false, &a, 1, k, &b, 1, n, par);
             dst.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
         };
         let single = run(Parallelism::None);
         assert!(single == run(Parallelism::Rayon(2)), "2 threads differ from 1");
         assert!(single == run(Parallelism::Rayon(3)), "3 threads differ from 1");
+    }
+
+    #[test]
+    #[should_panic(expected = "out of bounds")]
+    fn a_matrix_view_beyond_its_slice_is_refused() {
+        let (a, b) = (vec![1f32; 6], vec![1f32; 6]);
+        let mut dst = vec![0f32; 4];
+        // A claims (2, 4) with row stride 4: 8 elements, the slice has 6.
+        matmul(2, 2, 4, &mut dst, false, &a, 1, 4, &b, 1, 2, Parallelism::None);
     }
 
     #[test]

@@ -29,7 +29,7 @@ pub use crate::config::net::{Activation, MaskConfig, SelectionRule};
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};
 pub use element_view::{mask_views, transfer_lift, ElementView, LayerLift, LayerView};
-pub use fused::fused_mlp;
+pub use fused::{fused_mlp, matmul};
 pub use masked::MaskedLinear;
 pub use mlp::{FrozenWeights, MaskedMlp};
 pub use optim::{AdamConfig, MaskedAdam};
