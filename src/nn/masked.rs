@@ -335,7 +335,8 @@ impl MaskedLinear {
     }
 
     /// The training effective weight W * M_ste (out, in) and the current bias (out,), both differentiable.
-    /// The straight-through estimator (M taken as S = mu + sigma * eps) is [`masked_weight`]'s backward.
+    /// The straight-through estimator (M taken as S = mu + sigma * eps) is the backward of
+    /// `nn/masked_weight.rs`'s op.
     pub fn training_weight(&self) -> anyhow::Result<(Tensor, Tensor)> {
         self.effective_training_weight(true)
     }

@@ -111,7 +111,7 @@ impl MaskedAdam {
 
     /// Scales all gradients so their global L2 norm is at most `max_norm`. The norm counts only
     /// elements that may move (update mask 1); it is returned as it was before clipping.
-    /// Each parameter's square sum is taken in a fixed order ([`square_sum`]), and the sums in
+    /// Each parameter's square sum is taken in a fixed order (8 f64 lanes), and the sums in
     /// parameter order, so the norm does not depend on the thread count.
     pub fn clip_grad_norm(&self, params: &[Param], grads: &mut GradStore, max_norm: f64) -> anyhow::Result<f64> {
         let square_sums = params
