@@ -287,6 +287,25 @@ impl MaskedLinear {
     /// After E iterations sigma decays (x decay, floor); it is always kept in [floor, max].
     /// Both are done on log_sigma: + ln(decay), clamped to [ln floor, ln max].
     pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
+        let noise = self.draw_iteration_noise(rng)?;
+        self.begin_iteration_with_noise(iteration, noise)
+    }
+
+    /// The standard normal eps (out * in) of this iteration's S = mu + sigma * eps, from `rng`;
+    /// None while fine-tuning a repeat (its mask is fixed). The only part of
+    /// [`Self::begin_iteration`] that reads the random stream, so layers can draw in order
+    /// and then choose their masks in parallel.
+    pub(crate) fn draw_iteration_noise(&self, rng: &mut impl Rng) -> anyhow::Result<Option<Vec<f32>>> {
+        let t = self.training.as_ref().with_context(|| format!("{}: begin_iteration without begin_task", self.name))?;
+        Ok((!t.repeat).then(|| (0..self.out_dim * self.in_dim).map(|_| StandardNormal.sample(rng)).collect()))
+    }
+
+    /// [`Self::begin_iteration`] with the noise from [`Self::draw_iteration_noise`].
+    pub(crate) fn begin_iteration_with_noise(
+        &mut self,
+        iteration: usize,
+        noise: Option<Vec<f32>>,
+    ) -> anyhow::Result<()> {
         let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);
         let params = self.params();
         let t = self.training.as_mut().with_context(|| format!("{}: begin_iteration without begin_task", self.name))?;
@@ -308,7 +327,8 @@ impl MaskedLinear {
         set_var(&self.log_sigma, vec![log_sigma])?;
         let sigma = log_sigma.exp();
         let mu = var_values(&self.score_mean)?;
-        let eps: Vec<f32> = (0..n).map(|_| StandardNormal.sample(rng)).collect();
+        let eps = noise.with_context(|| format!("{}: no noise drawn for the iteration", self.name))?;
+        anyhow::ensure!(eps.len() == n, "{}: {} noise values for {n} elements", self.name, eps.len());
         let sample: Vec<f32> = mu.iter().zip(&eps).map(|(m, e)| m + sigma * e).collect();
         let selected = select_mask(&sample, &self.states, out_dim, in_dim, t.task, &params);
         t.mask_churn = t.previous_selection.as_ref().map(|previous| churn(previous, &selected));

@@ -14,6 +14,7 @@ use crate::config::net::{Activation, MaskConfig};
 use candle_core::Tensor;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 /// A network's effective weights at one moment, detached (see [`MaskedMlp::frozen_weights`]).
 #[derive(Debug, Clone)]
@@ -139,7 +140,25 @@ impl MaskedMlp {
 
     /// Once per training iteration: draw S = mu + sigma*eps, choose the hard masks, entropy schedule.
     pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
-        self.layers.iter_mut().try_for_each(|l| l.begin_iteration(iteration, rng))
+        let noise = self.draw_iteration_noise(rng)?;
+        self.begin_iteration_with_noise(iteration, noise)
+    }
+
+    /// Every layer's noise for the iteration, drawn in layer order (see
+    /// [`MaskedLinear::draw_iteration_noise`]).
+    pub(crate) fn draw_iteration_noise(&self, rng: &mut impl Rng) -> anyhow::Result<Vec<Option<Vec<f32>>>> {
+        self.layers.iter().map(|l| l.draw_iteration_noise(rng)).collect()
+    }
+
+    /// The layers choose their masks from `noise` in parallel (the draws were made in order,
+    /// so the masks are those of drawing and choosing layer by layer).
+    pub(crate) fn begin_iteration_with_noise(
+        &mut self,
+        iteration: usize,
+        noise: Vec<Option<Vec<f32>>>,
+    ) -> anyhow::Result<()> {
+        anyhow::ensure!(noise.len() == self.layers.len(), "{}: noise for {} layers", self.name, noise.len());
+        self.layers.par_iter_mut().zip(noise).try_for_each(|(l, n)| l.begin_iteration_with_noise(iteration, n))
     }
 
     /// Mask churn of the whole network: the share of this iteration's selected elements that

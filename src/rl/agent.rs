@@ -26,6 +26,7 @@ use crate::nn::{MaskedMlp, Param, TaskId};
 use candle_core::{Device, Tensor, Var};
 use rand::Rng;
 use rand_distr::StandardNormal;
+use rayon::prelude::*;
 
 /// Networks, policy std and observation statistics of one learner.
 #[derive(Debug)]
@@ -190,11 +191,12 @@ impl Agent {
     }
 
     /// Once per training iteration: new soft-score samples and masks.
+    /// The noise is drawn network by network in order, then the networks choose their masks
+    /// in parallel: the same masks as one network after the other.
     pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
-        for net in self.networks_mut() {
-            net.begin_iteration(iteration, rng)?;
-        }
-        Ok(())
+        let noise = self.networks().map(|net| net.draw_iteration_noise(rng));
+        let nets: Vec<(&mut MaskedMlp, anyhow::Result<_>)> = self.networks_mut().into_iter().zip(noise).collect();
+        nets.into_par_iter().try_for_each(|(net, noise)| net.begin_iteration_with_noise(iteration, noise?))
     }
 
     /// Sum of the networks' soft-score losses (METHOD 2.3), a scalar.
