@@ -32,6 +32,8 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal, Uniform};
 use std::collections::BTreeMap;
 
+mod iteration;
+
 /// The task being trained and its per-iteration tensors.
 #[derive(Debug, Clone)]
 pub(crate) struct Training {
@@ -103,17 +105,6 @@ fn set_var(var: &Var, values: Vec<f32>) -> anyhow::Result<()> {
 
 pub(crate) fn var_values(var: &Var) -> anyhow::Result<Vec<f32>> {
     Ok(var.as_tensor().flatten_all()?.to_vec1::<f32>()?)
-}
-
-/// Fraction of the elements selected in `now` that were not selected in `before` (0 when none is selected).
-fn churn(before: &[bool], now: &[bool]) -> f64 {
-    let selected = now.iter().filter(|s| **s).count();
-    let entered = now.iter().zip(before).filter(|(n, b)| **n && !**b).count();
-    if selected == 0 {
-        0.0
-    } else {
-        entered as f64 / selected as f64
-    }
 }
 
 fn mask_tensor(bits: impl Iterator<Item = bool>, out_dim: usize, in_dim: usize) -> anyhow::Result<Tensor> {
@@ -281,70 +272,6 @@ impl MaskedLinear {
         }
         self.training = Some(Training::new(task, repeat, 0, bias));
         Ok(())
-    }
-
-    /// Once per training iteration: draw S = mu + sigma * eps, choose the hard mask, set the update masks.
-    /// After E iterations sigma decays (x decay, floor); it is always kept in [floor, max].
-    /// Both are done on log_sigma: + ln(decay), clamped to [ln floor, ln max].
-    pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
-        let noise = self.draw_iteration_noise(rng)?;
-        self.begin_iteration_with_noise(iteration, noise)
-    }
-
-    /// The standard normal eps (out * in) of this iteration's S = mu + sigma * eps, from `rng`;
-    /// None while fine-tuning a repeat (its mask is fixed). The only part of
-    /// [`Self::begin_iteration`] that reads the random stream, so layers can draw in order
-    /// and then choose their masks in parallel.
-    pub(crate) fn draw_iteration_noise(&self, rng: &mut impl Rng) -> anyhow::Result<Option<Vec<f32>>> {
-        let t = self.training.as_ref().with_context(|| format!("{}: begin_iteration without begin_task", self.name))?;
-        Ok((!t.repeat).then(|| (0..self.out_dim * self.in_dim).map(|_| StandardNormal.sample(rng)).collect()))
-    }
-
-    /// [`Self::begin_iteration`] with the noise from [`Self::draw_iteration_noise`].
-    pub(crate) fn begin_iteration_with_noise(
-        &mut self,
-        iteration: usize,
-        noise: Option<Vec<f32>>,
-    ) -> anyhow::Result<()> {
-        let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);
-        let params = self.params();
-        let t = self.training.as_mut().with_context(|| format!("{}: begin_iteration without begin_task", self.name))?;
-        t.iteration = iteration;
-        if t.repeat {
-            let m = &self.masks[&t.task];
-            t.mask = Some(mask_tensor((0..n).map(|i| m.get(i)), out_dim, in_dim)?);
-            let own = ElementState::Private(t.task);
-            t.weight_update = Some(mask_tensor(self.states.iter().map(|s| *s == own), out_dim, in_dim)?);
-            t.score_update = Some(Tensor::zeros((out_dim, in_dim), DType::F32, &Device::Cpu)?);
-            t.noise = None;
-            return Ok(());
-        }
-        let mut log_sigma = var_values(&self.log_sigma)?[0];
-        if iteration >= self.cfg.entropy_iterations {
-            log_sigma += (self.cfg.sigma_decay as f32).ln();
-        }
-        log_sigma = log_sigma.clamp((self.cfg.sigma_floor as f32).ln(), (self.cfg.sigma_max as f32).ln());
-        set_var(&self.log_sigma, vec![log_sigma])?;
-        let sigma = log_sigma.exp();
-        let mu = var_values(&self.score_mean)?;
-        let eps = noise.with_context(|| format!("{}: no noise drawn for the iteration", self.name))?;
-        anyhow::ensure!(eps.len() == n, "{}: {} noise values for {n} elements", self.name, eps.len());
-        let sample: Vec<f32> = mu.iter().zip(&eps).map(|(m, e)| m + sigma * e).collect();
-        let selected = select_mask(&sample, &self.states, out_dim, in_dim, t.task, &params);
-        t.mask_churn = t.previous_selection.as_ref().map(|previous| churn(previous, &selected));
-        t.previous_selection = Some(selected.clone());
-        t.mask = Some(mask_tensor(selected.iter().copied(), out_dim, in_dim)?);
-        t.noise = Some(Tensor::from_vec(eps, (out_dim, in_dim), &Device::Cpu)?);
-        let vacant = self.states.iter().map(|s| *s == ElementState::Vacant);
-        t.weight_update = Some(mask_tensor(selected.iter().zip(vacant).map(|(s, v)| *s && v), out_dim, in_dim)?);
-        t.score_update = Some(mask_tensor(self.states.iter().map(|s| s.selectable_by(t.task)), out_dim, in_dim)?);
-        Ok(())
-    }
-
-    /// The share of this iteration's hard mask that the previous iteration had not selected
-    /// (None before a task's second iteration, and while fine-tuning, whose mask is fixed).
-    pub fn mask_churn(&self) -> Option<f64> {
-        self.training.as_ref().and_then(|t| t.mask_churn)
     }
 
     fn training_ready(&self) -> anyhow::Result<&Training> {
