@@ -8,7 +8,9 @@
 //!    `minibatches` random minibatches. Per minibatch: adapt the learning rate
 //!    from KL(old || new) (legged_gym), then minimise
 //!    `surrogate + c_v * value_loss - c_e * entropy + c_cenet * cenet_loss`,
-//!    clip the global gradient norm, one Adam step.
+//!    clip the global gradient norm, one Adam step. Each term depends only on
+//!    its own network's parameters, so actor, critic and CENet go forward and
+//!    backward in parallel and their gradients are merged before the clip.
 //!
 //! Metrics are namespaced as in CleanRL: `charts/*`, `losses/*`, `time/*`.
 
