@@ -18,7 +18,7 @@
 //! below), in one pass each way instead of about five element-wise kernels
 //! and their gradient buffers per layer.
 
-use super::activation::{contiguous_f32, with_f32_slice as with_slice};
+use super::activation::{contiguous_f32, with_f32_slice};
 use candle_core::{CpuStorage, CustomOp3, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
@@ -46,7 +46,7 @@ impl CustomOp3 for MaskedWeight {
         _l3: &Layout,
     ) -> candle_core::Result<(CpuStorage, Shape)> {
         let w = contiguous_f32(s1, l1, self.name())?;
-        let out = with_slice(&self.mask, "mask", |m| {
+        let out = with_f32_slice(&self.mask, "mask", |m| {
             let mut out = vec![0f32; w.len()];
             out.par_chunks_mut(CHUNK).zip(w.par_chunks(CHUNK).zip(m.par_chunks(CHUNK))).for_each(|(o, (w, m))| {
                 for ((o, w), m) in o.iter_mut().zip(w).zip(m) {
@@ -68,8 +68,8 @@ impl CustomOp3 for MaskedWeight {
     ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>, Option<Tensor>)> {
         let g = grad_res.contiguous()?;
         let shape = weight.shape().clone();
-        let grad_weight = with_slice(&g, "gradient", |g| {
-            with_slice(&self.mask, "mask", |m| {
+        let grad_weight = with_f32_slice(&g, "gradient", |g| {
+            with_f32_slice(&self.mask, "mask", |m| {
                 let mut out = vec![0f32; g.len()];
                 out.par_chunks_mut(CHUNK).zip(g.par_chunks(CHUNK).zip(m.par_chunks(CHUNK))).for_each(|(o, (g, m))| {
                     for ((o, g), m) in o.iter_mut().zip(g).zip(m) {
@@ -82,9 +82,9 @@ impl CustomOp3 for MaskedWeight {
         let grad_weight = Tensor::from_vec(grad_weight, shape.clone(), weight.device())?;
         let Some(noise) = &self.noise else { return Ok((Some(grad_weight), None, None)) };
         let w = weight.contiguous()?;
-        let (grad_mu, noise_sum) = with_slice(&g, "gradient", |g| {
-            with_slice(&w, "weight", |w| {
-                with_slice(noise, "noise", |eps| {
+        let (grad_mu, noise_sum) = with_f32_slice(&g, "gradient", |g| {
+            with_f32_slice(&w, "weight", |w| {
+                with_f32_slice(noise, "noise", |eps| {
                     let mut out = vec![0f32; g.len()];
                     let partial: Vec<f64> = out
                         .par_chunks_mut(CHUNK)

@@ -227,8 +227,7 @@ impl MaskedMlp {
     /// The training forward's values without a gradient (no activations kept): for rollouts
     /// with the current iteration's masks.
     pub fn forward_no_grad(&self, x: &Tensor) -> anyhow::Result<Tensor> {
-        let weights = self.layers.iter().map(|l| l.effective_training_weight(false)).collect::<anyhow::Result<_>>()?;
-        self.run(x, weights, false)
+        self.forward_weights(&self.frozen_weights(None)?, x)
     }
 
     /// Recall a finished task (W*M_t + b_t), bit-identical forever.

@@ -114,15 +114,8 @@ impl MaskedAdam {
     /// Each parameter's square sum is taken in a fixed order (8 f64 lanes), and the sums in
     /// parameter order, so the norm does not depend on the thread count.
     pub fn clip_grad_norm(&self, params: &[Param], grads: &mut GradStore, max_norm: f64) -> anyhow::Result<f64> {
-        let square_sums = params
-            .par_iter()
-            .map(|p| {
-                with_grad_and_mask(p, grads, |g, m| match m {
-                    Some(m) => square_sum(g, Some(m)),
-                    None => square_sum(g, None),
-                })
-            })
-            .collect::<anyhow::Result<Vec<_>>>()?;
+        let square_sums =
+            params.par_iter().map(|p| with_grad_and_mask(p, grads, square_sum)).collect::<anyhow::Result<Vec<_>>>()?;
         let norm = square_sums.into_iter().flatten().sum::<f64>().sqrt();
         if norm > max_norm && norm.is_finite() {
             let scale = max_norm / (norm + 1e-6);

@@ -68,8 +68,7 @@ impl Agent {
 
     /// Action means (as [`Self::action_mean`]) with frozen weights.
     fn action_mean_with(&self, w: &ActingWeights, obs: &Tensor, context: &Tensor) -> anyhow::Result<Tensor> {
-        let input = if self.use_cenet { Tensor::cat(&[obs, context], 1)? } else { obs.clone() };
-        self.actor.forward_weights(&w.actor, &input)
+        self.actor.forward_weights(&w.actor, &self.actor_input(obs, context)?)
     }
 
     /// Samples actions for normalised obs (N, obs) and histories (N, H * obs).
@@ -120,12 +119,8 @@ impl Agent {
         Ok(mean.flatten_all()?.to_vec1()?)
     }
 
-    /// Values (N,) for normalised privileged observations.
-    pub fn values(&self, privileged: &[f32]) -> anyhow::Result<Vec<f32>> {
-        self.values_with(&self.acting_weights()?, privileged)
-    }
-
-    /// [`Self::values`] with weights from [`Self::acting_weights`] (the same numbers).
+    /// Values (N,) for normalised privileged observations, with weights from
+    /// [`Self::acting_weights`].
     pub fn values_with(&self, w: &ActingWeights, privileged: &[f32]) -> anyhow::Result<Vec<f32>> {
         let x = matrix(privileged, self.dims.privileged_obs)?;
         Ok(self.critic.forward_weights(&w.critic, &x)?.squeeze(1)?.to_vec1()?)

@@ -291,8 +291,12 @@ impl Agent {
 
     /// Action means from normalised obs (B, obs) and context (B, context): (B, act).
     pub fn action_mean(&self, obs: &Tensor, context: &Tensor) -> anyhow::Result<Tensor> {
-        let input = if self.use_cenet { Tensor::cat(&[obs, context], 1)? } else { obs.clone() };
-        self.run(&self.actor, &input)
+        self.run(&self.actor, &self.actor_input(obs, context)?)
+    }
+
+    /// The actor's input (B, obs + context): `[obs | context]`, or obs alone without CENet.
+    pub(crate) fn actor_input(&self, obs: &Tensor, context: &Tensor) -> anyhow::Result<Tensor> {
+        Ok(if self.use_cenet { Tensor::cat(&[obs, context], 1)? } else { obs.clone() })
     }
 
     /// Values from normalised privileged obs (B, priv): (B,).

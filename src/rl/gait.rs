@@ -140,8 +140,10 @@ pub fn record_gait(
     let warmup = (warmup_s / dt).round() as usize;
     let total = warmup + (seconds / dt).round() as usize;
     let (mut contacts, mut vx, mut wz, mut fell) = (Vec::new(), 0.0f32, 0.0f32, false);
+    // Nothing trains while the gait is recorded: the effective weights are made once.
+    let weights = agent.acting_weights()?;
     for k in 0..total {
-        let actions = agent.act_deterministic(env.observation(), env.obs_history())?;
+        let actions = agent.act_deterministic_with(&weights, env.observation(), env.obs_history())?;
         let step = env.step(&actions)?;
         if step.terminated {
             fell = true;

@@ -5,6 +5,7 @@
 //! `record_gait` uses (nominal physics, no pushes); a fall or the end of an
 //! episode starts the next episode, so a viewer runs for as long as it is stepped.
 
+use super::acting::ActingWeights;
 use super::agent::Agent;
 use super::policy_dir::load_for_task;
 use crate::config::EnvConfig;
@@ -35,6 +36,8 @@ pub struct RobotFrame {
 /// A policy walking one robot, a control step per [`RobotViewer::step`].
 pub struct RobotViewer {
     agent: Agent,
+    /// The agent's acting weights, made once: the viewer owns the agent and never trains it.
+    weights: ActingWeights,
     env: LocomotionEnv,
     /// The command held through every episode; `None`: the env's own random commands.
     held: Option<[f32; 3]>,
@@ -72,8 +75,9 @@ impl RobotViewer {
         let cfg = EnvConfig { randomize: false, push_interval_s: 0.0, ..env_cfg.clone() };
         let mut env = LocomotionEnv::new(&cfg, robot, task)?;
         env.reset(seed)?;
+        let weights = agent.acting_weights()?;
         let mut viewer =
-            Self { agent, env, held: command, dt: cfg.policy_dt(), steps: 0, episode_steps: 0, episode: 0 };
+            Self { agent, weights, env, held: command, dt: cfg.policy_dt(), steps: 0, episode_steps: 0, episode: 0 };
         viewer.hold_command();
         Ok(viewer)
     }
@@ -138,7 +142,8 @@ impl RobotViewer {
     pub fn step(&mut self) -> anyhow::Result<RobotFrame> {
         // The command of this step (the env may resample it at the step's end).
         let command = self.env.command();
-        let actions = self.agent.act_deterministic(self.env.observation(), self.env.obs_history())?;
+        let actions =
+            self.agent.act_deterministic_with(&self.weights, self.env.observation(), self.env.obs_history())?;
         let step = self.env.step(&actions)?;
         self.steps += 1;
         self.episode_steps += 1;
