@@ -32,6 +32,8 @@ pub enum Command {
     Record(crate::cmd::record::RecordArgs),
     /// The workbench (also what `quadcl` alone opens): step through a sequence, watch training, masks, the robot.
     Tui(crate::cmd::tui::TuiArgs),
+    /// What quadcl understood of a robot's URDF (legs, joints, masses, feet, warnings) and whether it stands.
+    Robot(crate::cmd::robot::RobotArgs),
     /// Sim-to-real fine-tuning of one learned task on a shifted environment (its private parameters only).
     Finetune(crate::cmd::finetune::FinetuneArgs),
 }
@@ -48,6 +50,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Finetune(args)) => crate::cmd::finetune::run(args),
         Some(Command::Tui(args)) => crate::cmd::tui::run(args),
         Some(Command::Record(args)) => crate::cmd::record::run(args),
+        Some(Command::Robot(args)) => crate::cmd::robot::run(args),
         None => crate::cmd::tui::run(crate::cmd::tui::TuiArgs::default()),
     }
 }

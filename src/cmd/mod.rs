@@ -6,6 +6,7 @@ pub mod finetune;
 pub mod gait;
 pub mod masks;
 pub mod record;
+pub mod robot;
 pub mod run;
 pub mod train;
 pub mod tui;

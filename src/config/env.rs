@@ -4,6 +4,7 @@
 //!
 //! Every field has a default; a TOML `[env]` table only names what it changes.
 
+use super::robot::RobotConfig;
 use serde::{Deserialize, Serialize};
 
 /// The simulated robot, its control, rewards and randomisation.
@@ -81,6 +82,10 @@ pub struct EnvConfig {
     pub feet_height_target: f32,
     /// Named weights of the Table 1 reward terms (each also times the policy dt).
     pub rewards: RewardWeights,
+    /// Per-joint standing pose and gains, leg and foot names, by name pattern
+    /// (`[env.robot]`, see [`RobotConfig`]); empty for the A1.
+    #[serde(skip_serializing_if = "RobotConfig::is_empty")]
+    pub robot: RobotConfig,
 }
 
 /// Weights of the paper's Table 1 reward terms. A term's reward is
@@ -168,6 +173,7 @@ impl Default for EnvConfig {
             height_target: 0.30,
             feet_height_target: 0.08,
             rewards: RewardWeights::default(),
+            robot: RobotConfig::default(),
         }
     }
 }
@@ -241,6 +247,20 @@ impl EnvConfig {
             ("default_calf", self.default_calf),
         ] {
             anyhow::ensure!(v.is_finite(), "env.{name} must be finite, got {v}");
+        }
+        self.robot.validate()?;
+        if !self.robot.default_pose.is_empty() {
+            let d = Self::default();
+            let legacy = [
+                ("default_hip_left", self.default_hip_left, d.default_hip_left),
+                ("default_hip_right", self.default_hip_right, d.default_hip_right),
+                ("default_thigh_front", self.default_thigh_front, d.default_thigh_front),
+                ("default_thigh_rear", self.default_thigh_rear, d.default_thigh_rear),
+                ("default_calf", self.default_calf, d.default_calf),
+            ];
+            if let Some((name, _, _)) = legacy.iter().find(|(_, v, default)| v != default) {
+                anyhow::bail!("env.{name} and env.robot.default_pose both set the standing pose; keep one");
+            }
         }
         Ok(())
     }

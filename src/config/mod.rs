@@ -3,16 +3,19 @@
 //!
 //! One file per concern: [`env`](mod@env) (the simulated robot and its rewards),
 //! [`net`] (masked networks and the method's mask settings), [`ppo`] (the
-//! learner). A TOML file only names what it changes; every table and key is
-//! optional, and an unknown key is an error that names the file and the key.
+//! learner), [`robot`] (per-joint robot settings by name pattern). A TOML
+//! file only names what it changes; every table and key is optional, and an
+//! unknown key is an error that names the file and the key.
 
 pub mod env;
 pub mod net;
 pub mod ppo;
+pub mod robot;
 
 pub use env::EnvConfig;
 pub use net::NetConfig;
 pub use ppo::PpoConfig;
+pub use robot::RobotConfig;
 
 use anyhow::Context;
 use serde::{Deserialize, Serialize};

@@ -10,11 +10,11 @@
 //! observations. The env does not reset itself: the caller (or `VecEnv`)
 //! calls [`LocomotionEnv::reset_episode`] once a step says it is done.
 
-use super::env_setup::{build_sim, default_pose, first_non_finite, soft_limit, uniform};
+use super::env_setup::{build_sim, default_pose, first_non_finite, joint_gains, soft_limit, uniform};
 use super::episode::{EpisodeStats, Step};
 use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::observe::{StepInfo, StepObserver};
-use super::physics::{PhysicsParams, RawState, RobotSim};
+use super::physics::{PdGains, PhysicsParams, RawState, RobotSim};
 use super::reward::{self, RewardInput};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
@@ -37,6 +37,8 @@ pub struct LocomotionEnv {
     rng: ChaCha8Rng,
     sim: RobotSim,
     default_q: [f32; 12],
+    /// PD stiffness and damping per leg joint (`env.robot.kp` / `kd`, else `env.kp` / `kd`).
+    gains: PdGains,
     soft_lower: [f32; 12],
     soft_upper: [f32; 12],
     params: PhysicsParams,
@@ -71,11 +73,12 @@ impl LocomotionEnv {
         env_index: usize,
     ) -> anyhow::Result<Self> {
         cfg.validate()?;
-        let default_q = default_pose(cfg, &robot);
+        let default_q = default_pose(cfg, &robot).with_context(|| format!("robot {}", robot.path.display()))?;
+        let gains = joint_gains(cfg, &robot).with_context(|| format!("robot {}", robot.path.display()))?;
         let soft_lower = std::array::from_fn(|i| soft_limit(&robot, cfg, i).0);
         let soft_upper = std::array::from_fn(|i| soft_limit(&robot, cfg, i).1);
         let params = PhysicsParams { friction: 1.0, added_mass: 0.0, motor_strength: 1.0 };
-        let sim = build_sim(cfg, &robot, params, &default_q)?;
+        let sim = build_sim(cfg, &robot, params, &default_q, &gains)?;
         let mut env = Self {
             cfg: Arc::new(cfg.clone()),
             robot,
@@ -84,6 +87,7 @@ impl LocomotionEnv {
             rng: ChaCha8Rng::seed_from_u64(0),
             sim,
             default_q,
+            gains,
             soft_lower,
             soft_upper,
             params,
@@ -125,7 +129,7 @@ impl LocomotionEnv {
         } else {
             PhysicsParams { friction: 1.0, added_mass: 0.0, motor_strength: 1.0 }
         };
-        self.sim = build_sim(c, &self.robot, self.params, &self.default_q)
+        self.sim = build_sim(c, &self.robot, self.params, &self.default_q, &self.gains)
             .with_context(|| format!("env {}: building the world", self.env_index))?;
         self.resample_command();
         self.episode_step = 0;

@@ -49,6 +49,15 @@ pub struct PhysicsParams {
     pub motor_strength: f32,
 }
 
+/// PD gains per leg joint, in leg-joint order (before the episode's motor strength).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PdGains {
+    /// Stiffness, N m / rad.
+    pub kp: [f32; 12],
+    /// Damping, N m s / rad.
+    pub kd: [f32; 12],
+}
+
 /// The robot's state after a physics step, in world frame unless named.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RawState {
@@ -77,8 +86,7 @@ pub struct RobotSim {
     /// (collider, part) of every robot collider.
     parts: Vec<(ColliderHandle, Part)>,
     ground: ColliderHandle,
-    kp: f32,
-    kd: f32,
+    gains: PdGains,
     strength: f32,
     /// Current PD position targets, rad.
     targets: [f32; 12],
@@ -88,10 +96,15 @@ pub struct RobotSim {
 
 impl RobotSim {
     /// Builds the world: ground, robot at `cfg.start_height` in pose `q0`
-    /// (12 joint angles), at rest; step, solver and gains from `cfg`.
-    pub fn new(robot: &RobotModel, cfg: &EnvConfig, params: PhysicsParams, q0: &[f32; 12]) -> anyhow::Result<Self> {
-        let (dt, solver_iterations, height, kp, kd) =
-            (cfg.physics_dt, cfg.solver_iterations, cfg.start_height, cfg.kp, cfg.kd);
+    /// (12 joint angles), at rest; step and solver from `cfg`.
+    pub fn new(
+        robot: &RobotModel,
+        cfg: &EnvConfig,
+        params: PhysicsParams,
+        q0: &[f32; 12],
+        gains: &PdGains,
+    ) -> anyhow::Result<Self> {
+        let (dt, solver_iterations, height) = (cfg.physics_dt, cfg.solver_iterations, cfg.start_height);
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(0.0, 0.0, -9.81);
         let ip = &mut world.integration_parameters;
@@ -150,7 +163,7 @@ impl RobotSim {
         let mut parts = Vec::new();
         for (k, link_handle) in handles.links.iter().enumerate() {
             let urdf_link = link_sources[k];
-            let part_of = |c: ColliderHandle| -> Part {
+            let part_of = |c: usize| -> Part {
                 if urdf_link == robot.trunk_link {
                     return Part::Trunk;
                 }
@@ -160,22 +173,14 @@ impl RobotSim {
                         return Part::Thigh(l);
                     }
                     if robot.joints[3 * l + 2].child_link == urdf_link {
-                        let is_ball = world.colliders[c].shape().as_ball().is_some();
-                        return if is_ball { Part::Foot(l) } else { Part::Calf(l) };
-                    }
-                }
-                // A fixed foot link hanging from a calf.
-                let name = &robot.urdf.links[urdf_link].name;
-                for leg in Leg::ALL {
-                    let calf = &robot.urdf.links[robot.joints[3 * leg.index() + 2].child_link].name;
-                    if robot.urdf.joints.iter().any(|j| &j.child.link == name && &j.parent.link == calf) {
-                        return Part::Foot(leg.index());
+                        return if robot.foot_collisions[l].contains(&c) { Part::Foot(l) } else { Part::Calf(l) };
                     }
                 }
                 Part::Other
             };
-            for c in &link_handle.colliders {
-                parts.push((c.handle, part_of(c.handle)));
+            // One collider per URDF collision shape, in order (meshes are primitives by now).
+            for (i, c) in link_handle.colliders.iter().enumerate() {
+                parts.push((c.handle, part_of(i)));
             }
         }
 
@@ -191,8 +196,7 @@ impl RobotSim {
             limits,
             parts,
             ground,
-            kp,
-            kd,
+            gains: *gains,
             strength: params.motor_strength,
             targets: *q0,
             last_torques: [0.0; 12],
@@ -213,15 +217,16 @@ impl RobotSim {
     /// Joint damping: Kd on the leg joints (implicit), none on the free root
     /// (rapier gives every angular dof a default damping of 0.1); springs Kp.
     fn init_gains(&mut self) {
-        let (kp, kd) = (self.kp * self.strength, self.kd * self.strength);
+        let kp = self.gains.kp.map(|k| k * self.strength);
+        let kd = self.gains.kd.map(|k| k * self.strength);
         let links = self.joint_links;
         let targets = self.targets;
         let mb = self.world.multibody_joints.get_multibody_mut(self.multibody).expect("robot multibody exists");
         mb.damping_mut().fill(0.0);
         for (i, &id) in links.iter().enumerate() {
             let assembly = mb.link(id).expect("leg link exists").assembly_id();
-            mb.damping_mut()[assembly] = kd;
-            mb.link_mut(id).expect("leg link exists").joint.set_spring(3, kp, targets[i]);
+            mb.damping_mut()[assembly] = kd[i];
+            mb.link_mut(id).expect("leg link exists").joint.set_spring(3, kp[i], targets[i]);
         }
     }
 
@@ -270,7 +275,8 @@ impl RobotSim {
     /// would cross a limit within this step instead gets, for this step, a
     /// very stiff implicit spring resting on the limit: a mechanical stop.
     pub fn step(&mut self) -> anyhow::Result<()> {
-        let (kp, kd) = (self.kp * self.strength, self.kd * self.strength);
+        let kp = self.gains.kp.map(|k| k * self.strength);
+        let kd = self.gains.kd.map(|k| k * self.strength);
         let dt = self.world.integration_parameters.dt;
         let links = self.joint_links;
         let targets = self.targets;
@@ -281,6 +287,7 @@ impl RobotSim {
             let link = mb.link(id).expect("leg link exists");
             let q = link.joint.coords()[3];
             let qd = mb.joint_velocity(link)[0];
+            let (kp, kd) = (kp[i], kd[i]);
             let tau = kp * (targets[i] - q) - kd * qd;
             self.last_torques[i] = tau.clamp(-effort[i], effort[i]);
             let predicted = q + qd * dt;

@@ -1,0 +1,233 @@
+//! The tolerant first pass over URDF text, before urdf-rs's strict parser:
+//! what the simulators researchers use (MuJoCo's and Isaac Gym's URDF import)
+//! accept, quadcl accepts too, with a warning.
+//!
+//! - An element the URDF format allows once (a visual's `<material>`, a
+//!   joint's `<limit>`, an inertial's `<mass>`) that appears again: repeats
+//!   that are copies of the first are dropped; differing repeats are dropped
+//!   too where they cannot change the dynamics (inside `<visual>`), and are an
+//!   error everywhere else (two different masses have no right answer).
+//! - Elements the format does not know inside `<robot>`, `<link>` and
+//!   `<joint>` are dropped (ROS extensions `<gazebo>` and `<transmission>`
+//!   silently, anything else with a warning).
+//! - A number that does not parse is an error naming its line and attribute.
+//!
+//! Returns the cleaned text, which urdf-rs then reads.
+
+use anyhow::{anyhow, bail};
+use xml::{Element, Xml};
+
+/// Children `<robot>` may have; `gazebo` and `transmission` are dropped silently.
+const ROBOT_CHILDREN: [&str; 5] = ["link", "joint", "material", "gazebo", "transmission"];
+/// Children a `<link>` may have (any number of visuals and collisions).
+const LINK_CHILDREN: [&str; 3] = ["inertial", "visual", "collision"];
+/// Children a `<joint>` may have, each at most once.
+const JOINT_CHILDREN: [&str; 9] =
+    ["origin", "parent", "child", "axis", "calibration", "dynamics", "limit", "mimic", "safety_controller"];
+
+/// Attributes whose value is one or more numbers.
+const NUMERIC_ATTRIBUTES: [&str; 17] = [
+    "value", "xyz", "rpy", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "lower", "upper", "effort", "velocity", "radius",
+    "length", "size", "scale",
+];
+
+/// Cleans URDF text; pushes one line per tolerated problem onto `warnings`.
+pub(super) fn tolerant_urdf_text(text: &str, warnings: &mut Vec<String>) -> anyhow::Result<String> {
+    if let Some(bad) = find_bad_number(text) {
+        bail!("bad number: {bad}");
+    }
+    let mut robot: Element = text.parse().map_err(|e| anyhow!("malformed URDF: {e}"))?;
+    if robot.name != "robot" {
+        bail!("malformed URDF: the root element is <{}>, expected <robot>", robot.name);
+    }
+    keep_known(&mut robot, "robot", &ROBOT_CHILDREN, warnings);
+    robot.children.retain(|c| !matches!(c, Xml::ElementNode(e) if e.name == "gazebo" || e.name == "transmission"));
+    for child in elements_mut(&mut robot) {
+        let owner = format!("{} '{}'", child.name, child.get_attribute("name", None).unwrap_or("?"));
+        match child.name.as_str() {
+            "link" => {
+                keep_known(child, &owner, &LINK_CHILDREN, warnings);
+                once_each(child, &owner, &["inertial"], true, warnings)?;
+                for part in elements_mut(child) {
+                    let (what, dynamic, singles): (_, _, &[&str]) = match part.name.as_str() {
+                        "inertial" => ("<inertial>", true, &["origin", "mass", "inertia"]),
+                        "collision" => ("<collision>", true, &["origin", "geometry"]),
+                        _ => ("<visual>", false, &["origin", "geometry", "material"]),
+                    };
+                    once_each(part, &format!("{owner} {what}"), singles, dynamic, warnings)?;
+                }
+            }
+            "joint" => {
+                keep_known(child, &owner, &JOINT_CHILDREN, warnings);
+                once_each(child, &owner, &JOINT_CHILDREN, true, warnings)?;
+            }
+            _ => {}
+        }
+    }
+    Ok(robot.to_string())
+}
+
+fn elements_mut(e: &mut Element) -> impl Iterator<Item = &mut Element> {
+    e.children.iter_mut().filter_map(|c| match c {
+        Xml::ElementNode(e) => Some(e),
+        _ => None,
+    })
+}
+
+/// Drops the children of `e` whose name is not in `known`, with a warning each.
+fn keep_known(e: &mut Element, owner: &str, known: &[&str], warnings: &mut Vec<String>) {
+    e.children.retain(|c| match c {
+        Xml::ElementNode(child) if !known.contains(&child.name.as_str()) => {
+            warnings.push(format!("{owner}: unknown element <{}> ignored", child.name));
+            false
+        }
+        _ => true,
+    });
+}
+
+/// Keeps the first of each repeated `singles` child of `e`. A repeat that is a
+/// copy of the first is dropped with a warning; a differing one too when
+/// `dynamic` is false, else it is an error.
+fn once_each(
+    e: &mut Element,
+    owner: &str,
+    singles: &[&str],
+    dynamic: bool,
+    warnings: &mut Vec<String>,
+) -> anyhow::Result<()> {
+    for &name in singles {
+        let mut first: Option<Element> = None;
+        let mut error = None;
+        e.children.retain(|c| {
+            let Xml::ElementNode(child) = c else { return true };
+            if child.name != name {
+                return true;
+            }
+            match &first {
+                None => {
+                    first = Some(child.clone());
+                    true
+                }
+                Some(kept) if same(kept, child) => {
+                    warnings.push(format!("{owner}: repeated <{name}> (a copy of the first) ignored"));
+                    false
+                }
+                Some(_) if !dynamic => {
+                    warnings.push(format!("{owner}: repeated <{name}> differs from the first; the first is used"));
+                    false
+                }
+                Some(_) => {
+                    error.get_or_insert_with(|| {
+                        anyhow!("{owner} has two different <{name}> elements (the URDF format allows one)")
+                    });
+                    true
+                }
+            }
+        });
+        if let Some(error) = error {
+            return Err(error);
+        }
+    }
+    Ok(())
+}
+
+/// Whether two elements say the same: name, attributes and child elements,
+/// whatever the whitespace between them.
+fn same(a: &Element, b: &Element) -> bool {
+    let kids = |e: &Element| -> Vec<Element> {
+        e.children
+            .iter()
+            .filter_map(|c| match c {
+                Xml::ElementNode(e) => Some(e.clone()),
+                _ => None,
+            })
+            .collect()
+    };
+    let (ka, kb) = (kids(a), kids(b));
+    a.name == b.name
+        && a.attributes == b.attributes
+        && ka.len() == kb.len()
+        && ka.iter().zip(&kb).all(|(x, y)| same(x, y))
+}
+
+/// The first numeric attribute that does not parse, as "line N: name=\"value\" is not a number".
+fn find_bad_number(text: &str) -> Option<String> {
+    for (line_no, line) in text.lines().enumerate() {
+        let mut rest = line;
+        while let Some(eq) = rest.find("=\"") {
+            let name = rest[..eq].rsplit(|c: char| c.is_whitespace() || c == '<').next().unwrap_or("");
+            let after = &rest[eq + 2..];
+            let Some(close) = after.find('"') else { break };
+            let value = &after[..close];
+            if NUMERIC_ATTRIBUTES.contains(&name) && value.split_whitespace().any(|t| t.parse::<f64>().is_err()) {
+                return Some(format!("line {}: {name}=\"{value}\" is not a number", line_no + 1));
+            }
+            rest = &after[close + 1..];
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn clean(text: &str) -> (anyhow::Result<String>, Vec<String>) {
+        let mut warnings = Vec::new();
+        (tolerant_urdf_text(text, &mut warnings), warnings)
+    }
+
+    #[test]
+    fn a_repeated_visual_material_is_kept_once_with_a_warning() {
+        let text = r#"<robot name="r"><link name="a"><visual><geometry><box size="1 1 1"/></geometry>
+            <material name="red"/><material name="blue"/></visual></link></robot>"#;
+        let (out, warnings) = clean(text);
+        let out = out.unwrap();
+        assert_eq!(out.matches("<material").count(), 1, "{out}");
+        assert!(out.contains("red") && !out.contains("blue"), "{out}");
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(warnings[0].contains("link 'a'") && warnings[0].contains("<material>"), "{warnings:?}");
+    }
+
+    #[test]
+    fn differing_repeats_that_change_the_dynamics_are_an_error_naming_the_link() {
+        let text = r#"<robot name="r"><link name="leg"><inertial><mass value="1"/><mass value="2"/>
+            <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link></robot>"#;
+        let err = format!("{:#}", clean(text).0.unwrap_err());
+        assert!(err.contains("link 'leg'") && err.contains("<mass>"), "{err}");
+        // A copy of the same mass is harmless.
+        let copy = text.replace("value=\"2\"", "value=\"1\"");
+        let (out, warnings) = clean(&copy);
+        assert_eq!(out.unwrap().matches("<mass").count(), 1);
+        assert!(warnings[0].contains("a copy"), "{warnings:?}");
+    }
+
+    #[test]
+    fn unknown_elements_are_dropped_and_ros_extensions_silently() {
+        let text = r#"<robot name="r"><gazebo reference="a"/><transmission name="t"/><sensor name="s"/>
+            <link name="a"><contact_coefficients mu="1"/></link>
+            <joint name="j" type="fixed"><parent link="a"/><child link="b"/><limit effort="1"/><limit effort="1"/>
+            </joint><link name="b"/></robot>"#;
+        let (out, warnings) = clean(text);
+        let out = out.unwrap();
+        assert!(!out.contains("gazebo") && !out.contains("sensor") && !out.contains("contact_coefficients"));
+        assert_eq!(out.matches("<limit").count(), 1, "{out}");
+        assert_eq!(warnings.len(), 3, "{warnings:?}");
+        assert!(warnings.iter().any(|w| w.contains("robot: unknown element <sensor>")), "{warnings:?}");
+        assert!(warnings.iter().any(|w| w.contains("link 'a': unknown element <contact_coefficients>")));
+        assert!(warnings.iter().any(|w| w.contains("joint 'j': repeated <limit>")), "{warnings:?}");
+    }
+
+    #[test]
+    fn bad_numbers_and_broken_xml_are_errors_that_say_where() {
+        let err = format!(
+            "{:#}",
+            clean("<robot name=\"r\">\n<link name=\"a\"><inertial><mass value=\"x1\"/>").0.unwrap_err()
+        );
+        assert!(err.contains("line 2") && err.contains("value=\"x1\""), "{err}");
+        let err = format!("{:#}", clean("<robot name=\"r\"><link name=\"a\">").0.unwrap_err());
+        assert!(err.contains("malformed URDF"), "{err}");
+        let err = format!("{:#}", clean("<sdf/>").0.unwrap_err());
+        assert!(err.contains("<sdf>"), "{err}");
+    }
+}
