@@ -180,4 +180,15 @@ mod tests {
         let err = check_patterns_match("kd", &["*_KEF".to_string()], &["LF_KFE"]).unwrap_err();
         assert!(format!("{err}").contains("\"*_KEF\" matches none"), "{err}");
     }
+
+    #[test]
+    fn a_config_with_robot_tables_round_trips_through_toml_and_the_a1_writes_none() {
+        let text = "[env]\nurdf = \"x.urdf\"\n[env.robot.default_pose]\n\"*_HAA\" = 0.0\n\"?H_KFE\" = 0.8\n[env.robot.kp]\n\"LF_KFE\" = 60.0\n";
+        let cfg = crate::config::Config::from_toml_str(text).unwrap();
+        assert_eq!(cfg.env.robot.default_pose.len(), 2);
+        assert_eq!(cfg.env.robot.kp["LF_KFE"], 60.0);
+        let back = crate::config::Config::from_toml_str(&cfg.to_toml_string()).unwrap();
+        assert_eq!(back, cfg);
+        assert!(!crate::config::Config::default().to_toml_string().contains("robot"));
+    }
 }
