@@ -6,7 +6,7 @@ mod tui_common;
 use quadcl::cl::SwitchOverrides;
 use quadcl::engine::Command;
 use quadcl::tui::{Action, Outgoing, Panel, Screen};
-use tui_common::{act, open_toy, pump};
+use tui_common::{act, open_toy, pump, screen};
 
 fn sent(app: &mut quadcl::tui::App) -> Vec<Outgoing> {
     std::mem::take(&mut app.outbox)
@@ -116,7 +116,12 @@ fn start_pause_and_quit_while_training_ask_the_engine_and_the_user() {
         curve: Default::default(),
         arrivals: vec![],
         sps: None,
+        physics_resets: 0,
     });
+    let training = |app: &quadcl::tui::app::App| screen(app, 120, 40, tmp.path());
+    assert!(!training(&app).contains("physics resets"));
+    app.live.as_mut().unwrap().physics_resets = 3;
+    assert!(training(&app).contains("physics resets 3"), "{}", training(&app));
     app.update(Action::Quit);
     assert!(app.confirm_quit && !app.quit);
     app.update(Action::ConfirmQuit(false));

@@ -60,6 +60,10 @@ pub struct PpoConfig {
     pub init_action_std: f64,
     /// Observation normalisation: clip normalised values to +-this.
     pub obs_clip: f64,
+    /// An env whose physics blows up (a non-finite state, a rapier failure) is
+    /// reset and counted (`charts/physics_resets`); training stops with an
+    /// error only when more than this fraction of an iteration's env steps did.
+    pub max_physics_reset_rate: f64,
     /// Normalise observations with running statistics (frozen when a task ends).
     pub normalize_observations: bool,
     /// Factor on the actor's output-layer initial weights (and its
@@ -116,6 +120,7 @@ impl Default for PpoConfig {
             init_action_std: 1.0,
             actor_output_init_scale: 0.01,
             obs_clip: 5.0,
+            max_physics_reset_rate: 0.01,
             normalize_observations: true,
             use_cenet: true,
             cenet_latent_dim: 16,
@@ -181,6 +186,11 @@ impl PpoConfig {
         );
         anyhow::ensure!(self.lr_factor > 1.0, "ppo.lr_factor must be > 1, got {}", self.lr_factor);
         anyhow::ensure!(self.obs_clip > 0.0, "ppo.obs_clip must be > 0, got {}", self.obs_clip);
+        anyhow::ensure!(
+            (0.0..=1.0).contains(&self.max_physics_reset_rate),
+            "ppo.max_physics_reset_rate must be in [0, 1], got {}",
+            self.max_physics_reset_rate
+        );
         Ok(())
     }
 }

@@ -194,6 +194,7 @@ mod tests {
                 truncated: vec![false; 2],
                 next_obs_before_reset: self.obs.clone(),
                 finished,
+                physics_resets: Vec::new(),
             })
         }
     }

@@ -132,6 +132,7 @@ impl Learner for ToyLearner {
             survival_s: 0.0,
             return_std: None,
             seed,
+            physics_resets: 0,
         };
         Ok(Evaluation { report, performance: 1.0 / (1.0 + mse) })
     }

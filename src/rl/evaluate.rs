@@ -29,6 +29,14 @@ pub struct EvalReport {
     pub return_std: Option<f64>,
     /// The evaluation seed.
     pub seed: u64,
+    /// Envs reset because their physics blew up (their cut-short episodes are
+    /// not counted; each env's next episode is). Written only when not 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub physics_resets: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// Runs every member of `env` for one episode with `agent`'s deterministic
@@ -44,10 +52,12 @@ pub fn evaluate(
     let n = env.num_envs();
     let mut first: Vec<Option<EpisodeSummary>> = vec![None; n];
     let mut done = 0;
+    let mut physics_resets = 0;
     let weights = agent.acting_weights()?;
     for _ in 0..max_steps {
         let actions = agent.act_deterministic_with(&weights, env.observations(), env.obs_histories())?;
         let step = env.step(&actions)?;
+        physics_resets += step.physics_resets.len();
         for episode in step.finished {
             anyhow::ensure!(episode.env < n, "episode from env {} of {n}", episode.env);
             let slot = &mut first[episode.env];
@@ -62,7 +72,7 @@ pub fn evaluate(
     }
     anyhow::ensure!(done == n, "evaluation: only {done} of {n} episodes ended within {max_steps} steps");
     let episodes: Vec<EpisodeSummary> = first.into_iter().flatten().collect();
-    Ok(summarize(task, seed, &episodes))
+    Ok(EvalReport { physics_resets, ..summarize(task, seed, &episodes) })
 }
 
 /// The report over finished episodes.
@@ -81,6 +91,7 @@ pub fn summarize(task: &str, seed: u64, episodes: &[EpisodeSummary]) -> EvalRepo
         survival_s: mean(&|e| f64::from(e.length_s)),
         return_std: Some(variance.sqrt()),
         seed,
+        physics_resets: 0,
     }
 }
 

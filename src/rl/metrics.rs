@@ -23,6 +23,8 @@ pub mod names {
     pub const SPS: &str = "charts/SPS";
     /// Environment steps of the training run (or of the sequence step) so far.
     pub const ENV_STEPS: &str = "charts/env_steps";
+    /// Envs reset in the iteration because their physics blew up (a non-finite state, a rapier failure).
+    pub const PHYSICS_RESETS: &str = "charts/physics_resets";
     /// Wall-clock seconds of the training run (or of the sequence step) so far.
     pub const WALL_S: &str = "time/wall_s";
 }

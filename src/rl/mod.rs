@@ -51,7 +51,7 @@ pub use policy_dir::{
     load_for_task, load_policy, load_policy_or_checkpoint, load_training_checkpoint, save_policy, LoadedPolicy,
     PolicyInfo, PolicyOrCheckpoint,
 };
-pub use ppo::PpoLearner;
+pub use ppo::{check_physics_resets, PpoLearner};
 pub use progress::{iteration_line, iteration_summary, progress_bar, TrainingClock};
 pub use robot_view::{RobotFrame, RobotViewer};
 pub use sim_env::SimTrainEnv;

@@ -114,6 +114,7 @@ impl PpoLearner {
         self.buffer.clear();
         self.rollout_log_std = Some(self.agent.log_std.as_tensor().copy()?);
         let (mut env_s, mut policy_s) = (0.0f64, 0.0f64);
+        let mut physics_resets: Vec<(usize, String)> = Vec::new();
         // Nothing trains during the rollout: the effective weights are made once.
         let weights = self.agent.acting_weights()?;
         for _ in 0..self.cfg.steps_per_env {
@@ -158,6 +159,7 @@ impl PpoLearner {
                 terminated: &step.terminated,
                 truncated: &step.truncated,
             })?;
+            physics_resets.extend(step.physics_resets);
             for episode in step.finished {
                 if self.recent_episodes.len() == EPISODE_WINDOW {
                     self.recent_episodes.pop_front();
@@ -169,7 +171,13 @@ impl PpoLearner {
             self.agent.values_with(&weights, &self.agent.normalize_privileged(env.privileged_observations()))?;
         self.buffer.compute_returns(&last_values, self.cfg.gamma as f32, self.cfg.gae_lambda as f32)?;
 
+        check_physics_resets(
+            &physics_resets,
+            self.buffer.num_envs * self.cfg.steps_per_env,
+            self.cfg.max_physics_reset_rate,
+        )?;
         let mut m = Metrics::new();
+        m.insert(names::PHYSICS_RESETS.into(), physics_resets.len() as f64);
         m.insert("time/env_s".into(), env_s);
         m.insert("time/policy_s".into(), policy_s);
         if !self.recent_episodes.is_empty() {
@@ -348,4 +356,20 @@ struct ActorTerms {
 fn add(sums: &mut Metrics, name: &str, value: &Tensor) -> anyhow::Result<()> {
     *sums.entry(name.into()).or_default() += f64::from(value.to_scalar::<f32>()?);
     Ok(())
+}
+
+/// Errors when more than `max_rate` of an iteration's `env_steps` ended in a
+/// physics blow-up (each already reset its env); the error says how many, the
+/// limit's key and what the last one was.
+pub fn check_physics_resets(resets: &[(usize, String)], env_steps: usize, max_rate: f64) -> anyhow::Result<()> {
+    let rate = resets.len() as f64 / env_steps.max(1) as f64;
+    match resets.last() {
+        Some((_, last)) if rate > max_rate => anyhow::bail!(
+            "the physics blew up in {} of this iteration's {env_steps} env steps ({:.2} %, more than \
+             ppo.max_physics_reset_rate = {max_rate}); the last: {last}",
+            resets.len(),
+            100.0 * rate
+        ),
+        _ => Ok(()),
+    }
 }

@@ -21,7 +21,8 @@ pub fn progress_bar(len: usize, visible: bool) -> ProgressBar {
 }
 
 /// One iteration in words: `return 3.21 lin_vel_err 0.410 ang_vel_err 0.620 fall_rate 0.20 SPS 3300`
-/// (`-` for a figure the iteration did not report, e.g. before any episode ended).
+/// (`-` for a figure the iteration did not report, e.g. before any episode ended),
+/// then `physics_resets N` when envs were reset after a physics blow-up.
 pub fn iteration_summary(metrics: &Metrics) -> String {
     let mut line = String::new();
     for (label, key, digits) in [
@@ -38,6 +39,10 @@ pub fn iteration_summary(metrics: &Metrics) -> String {
             Some(v) => line.push_str(&format!("{label} {v:.digits$}")),
             None => line.push_str(&format!("{label} -")),
         }
+    }
+    // Only when it happened: a blow-up is rare and worth seeing.
+    if let Some(&resets) = metrics.get(names::PHYSICS_RESETS).filter(|&&r| r > 0.0) {
+        line.push_str(&format!(" physics_resets {resets:.0}"));
     }
     line
 }
@@ -94,6 +99,14 @@ mod tests {
             iteration_line(1, 25, 500, &metrics),
             "step 1 iteration 25/500: return 3.21 lin_vel_err - ang_vel_err - fall_rate - SPS 3302"
         );
+    }
+
+    #[test]
+    fn physics_resets_join_the_line_only_when_there_were_some() {
+        let mut metrics: Metrics = [(names::PHYSICS_RESETS.to_string(), 0.0)].into_iter().collect();
+        assert!(!iteration_summary(&metrics).contains("physics"));
+        metrics.insert(names::PHYSICS_RESETS.into(), 2.0);
+        assert!(iteration_summary(&metrics).ends_with("SPS - physics_resets 2"), "{}", iteration_summary(&metrics));
     }
 
     #[test]

@@ -123,6 +123,7 @@ impl TrainEnv for ToyEnv {
             truncated: vec![false; n],
             next_obs_before_reset: vec![0.0; n * 3],
             finished: Vec::new(),
+            physics_resets: Vec::new(),
         };
         for (e, &action) in actions.iter().enumerate() {
             let a = action.clamp(-3.0, 3.0);

@@ -11,7 +11,7 @@
 //! calls [`LocomotionEnv::reset_episode`] once a step says it is done.
 
 use super::env_setup::{build_sim, default_pose, first_non_finite, joint_gains, soft_limit, uniform};
-use super::episode::{EpisodeStats, Step};
+use super::episode::{EpisodeStats, PhysicsBlowUp, Step};
 use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::observe::{StepInfo, StepObserver};
 use super::physics::{PdGains, PhysicsParams, RawState, RobotSim};
@@ -411,13 +411,13 @@ impl LocomotionEnv {
 
     fn check_finite(&self, s: &RawState) -> anyhow::Result<()> {
         match first_non_finite(s) {
-            Some((name, i, v)) => bail!(
+            Some((name, i, v)) => Err(anyhow::Error::new(PhysicsBlowUp(format!(
                 "env {}: the physics produced a non-finite {name} (component {i} = {v}) at step {} (episode step {}, task {})",
                 self.env_index,
                 self.total_steps + 1,
                 self.episode_step + 1,
                 self.task
-            ),
+            )))),
             None => Ok(()),
         }
     }

@@ -73,3 +73,18 @@ impl EpisodeStats {
         }
     }
 }
+
+/// A physics step that blew up: the state went non-finite, or rapier failed
+/// inside the step. The env that returns it is in no state to continue and
+/// must be reset; [`VecEnv`](super::VecEnv) does so and counts it
+/// (`VecStep::physics_resets`) instead of ending the run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PhysicsBlowUp(pub String);
+
+impl std::fmt::Display for PhysicsBlowUp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for PhysicsBlowUp {}

@@ -35,7 +35,7 @@ mod vec_env;
 
 pub use env::LocomotionEnv;
 pub use env_setup::{default_pose, joint_gains};
-pub use episode::{EpisodeSummary, Step};
+pub use episode::{EpisodeSummary, PhysicsBlowUp, Step};
 pub use obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_BASE_LIN_VEL, PRIV_OBS_DIM};
 pub use observe::{LinkPose, StepInfo, StepObserver};
 pub use physics::{PdGains, RawState};

@@ -310,7 +310,7 @@ impl RobotSim {
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".into());
-            anyhow::anyhow!("rapier failed inside a physics step: {what}")
+            anyhow::Error::new(super::episode::PhysicsBlowUp(format!("rapier failed inside a physics step: {what}")))
         })
     }
 

@@ -1,5 +1,6 @@
 //! A batch of `LocomotionEnv`s stepped in parallel with rayon, auto-resetting
-//! the ones that finish.
+//! the ones that finish, and the ones whose physics blew up (a non-finite
+//! state or a rapier failure costs that env its episode, not the run).
 //!
 //! Determinism: each env owns its world and its own ChaCha stream seeded
 //! from (seed, env index), and results are gathered by index, so the same
@@ -8,7 +9,7 @@
 //! observations (num_envs, PRIV_OBS_DIM), histories (num_envs, HISTORY_LEN * OBS_DIM).
 
 use super::env::LocomotionEnv;
-use super::episode::{EpisodeSummary, Step};
+use super::episode::{EpisodeSummary, PhysicsBlowUp, Step};
 use super::obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
@@ -32,6 +33,18 @@ pub struct VecStep {
     pub next_obs_before_reset: Vec<f32>,
     /// Episodes that ended in this step, in env order.
     pub finished: Vec<EpisodeSummary>,
+    /// Envs whose physics blew up in this step, with what happened: each was
+    /// reset (its row reads terminated, reward 0, the new episode's first
+    /// observation) and its cut-short episode is not among `finished`.
+    pub physics_resets: Vec<(usize, String)>,
+}
+
+/// What one env's step came to.
+enum StepOutcome {
+    /// A step, with the observation it reached (before any auto-reset).
+    Stepped(Step, [f32; OBS_DIM]),
+    /// The physics blew up (what happened) and the env was reset (its first observation).
+    Reset(String, [f32; OBS_DIM]),
 }
 
 /// A batch of environments.
@@ -82,6 +95,13 @@ impl VecEnv {
         Ok(())
     }
 
+    /// Pushes env `env` now: adds `dv` (world x, y, m/s) to its trunk's velocity.
+    pub fn push(&mut self, env: usize, dv: [f32; 2]) -> anyhow::Result<()> {
+        let n = self.envs.len();
+        self.envs.get_mut(env).ok_or_else(|| anyhow::anyhow!("no env {env}: the batch has {n}"))?.push(dv);
+        Ok(())
+    }
+
     /// Number of envs.
     pub fn num_envs(&self) -> usize {
         self.envs.len()
@@ -127,17 +147,25 @@ impl VecEnv {
         if actions.len() != n * ACT_DIM {
             bail!("VecEnv::step: {} actions for {n} envs, expected {} ({n} x {ACT_DIM})", actions.len(), n * ACT_DIM);
         }
-        let results: Vec<anyhow::Result<(Step, [f32; OBS_DIM])>> = self
+        let results: Vec<anyhow::Result<StepOutcome>> = self
             .envs
             .par_iter_mut()
             .zip(actions.par_chunks(ACT_DIM))
-            .map(|(env, action)| {
-                let step = env.step(action)?;
-                let next_obs = *env.observation();
-                if step.terminated || step.truncated {
-                    env.reset_episode()?;
+            .map(|(env, action)| match env.step(action) {
+                Ok(step) => {
+                    let next_obs = *env.observation();
+                    if step.terminated || step.truncated {
+                        env.reset_episode()?;
+                    }
+                    Ok(StepOutcome::Stepped(step, next_obs))
                 }
-                Ok((step, next_obs))
+                Err(e) => match e.downcast_ref::<PhysicsBlowUp>() {
+                    Some(_) => {
+                        env.reset_episode()?;
+                        Ok(StepOutcome::Reset(format!("{e:#}"), *env.observation()))
+                    }
+                    None => Err(e),
+                },
             })
             .collect();
         let mut out = VecStep {
@@ -146,14 +174,26 @@ impl VecEnv {
             truncated: Vec::with_capacity(n),
             next_obs_before_reset: Vec::with_capacity(n * OBS_DIM),
             finished: Vec::new(),
+            physics_resets: Vec::new(),
         };
-        for r in results {
-            let (step, next_obs) = r?;
-            out.reward.push(step.reward);
-            out.terminated.push(step.terminated);
-            out.truncated.push(step.truncated);
-            out.next_obs_before_reset.extend_from_slice(&next_obs);
-            out.finished.extend(step.finished);
+        for (i, r) in results.into_iter().enumerate() {
+            match r? {
+                StepOutcome::Stepped(step, next_obs) => {
+                    out.reward.push(step.reward);
+                    out.terminated.push(step.terminated);
+                    out.truncated.push(step.truncated);
+                    out.next_obs_before_reset.extend_from_slice(&next_obs);
+                    out.finished.extend(step.finished);
+                }
+                StepOutcome::Reset(what, first_obs) => {
+                    tracing::warn!("{what}; the env was reset");
+                    out.reward.push(0.0);
+                    out.terminated.push(true);
+                    out.truncated.push(false);
+                    out.next_obs_before_reset.extend_from_slice(&first_obs);
+                    out.physics_resets.push((i, what));
+                }
+            }
         }
         self.gather();
         Ok(out)

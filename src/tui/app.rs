@@ -104,6 +104,8 @@ pub struct Live {
     pub arrivals: Vec<f64>,
     /// Env steps per second the learner reported last.
     pub sps: Option<f64>,
+    /// Envs reset so far in this task because their physics blew up (`charts/physics_resets`).
+    pub physics_resets: usize,
 }
 
 impl Live {

@@ -49,7 +49,8 @@ impl App {
             Event::TaskStarted { step, task, name, iterations, switches, related, repeat } => {
                 let record = StepRecord { step, task, name: name.clone(), iterations, switches, related, repeat };
                 let curve = TaskCurve { step, task, name, ..Default::default() };
-                self.live = Some(Live { record, iteration: 0, curve, arrivals: Vec::new(), sps: None });
+                self.live =
+                    Some(Live { record, iteration: 0, curve, arrivals: Vec::new(), sps: None, physics_resets: 0 });
                 self.next.task_started();
                 if let Some(o) = &self.opened {
                     self.next.reset(o, step + 1);
@@ -64,6 +65,7 @@ impl App {
                     l.iteration = iteration;
                     l.curve.push(&metrics);
                     l.sps = metrics.get(crate::rl::metric_names::SPS).copied().or(l.sps);
+                    l.physics_resets += metrics.get(crate::rl::metric_names::PHYSICS_RESETS).map_or(0, |&r| r as usize);
                     l.arrivals.push(now);
                     if l.arrivals.len() > 10 {
                         l.arrivals.remove(0);

@@ -42,6 +42,12 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
             l.sps.map_or("-".into(), |s| format!("{s:.0}")),
             left.map_or("-".into(), duration)
         )));
+        if l.physics_resets > 0 {
+            lines.push(Line::styled(
+                format!("physics resets {} (envs whose physics blew up, reset)", l.physics_resets),
+                Style::new().fg(Color::Yellow),
+            ));
+        }
     } else if app.stopped {
         lines.push(Line::raw("stopped: the results are written"));
     } else {
