@@ -162,3 +162,10 @@ fn a_link_not_connected_to_the_trunk_is_an_error() {
     let err = load_err("ghost.urdf", &text);
     assert!(err.contains("ghost.urdf") && err.contains("not a tree") && err.contains("ghost_a"), "{err}");
 }
+
+#[test]
+fn a_massless_calf_is_an_error_naming_the_link() {
+    let text = a1_text().replacen("<mass value=\"0.166\"/>", "<mass value=\"0\"/>", 1);
+    let err = load_err("massless_calf.urdf", &text);
+    assert!(err.contains("massless_calf.urdf") && err.contains("FL_calf") && err.contains("no mass"), "{err}");
+}

@@ -34,7 +34,12 @@ pub struct EvalArgs {
 }
 
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(args.episodes > 0, "--episodes must be > 0");
+    let max = quadcl::config::ppo::MAX_ENVS;
+    anyhow::ensure!(
+        args.episodes > 0 && args.episodes <= max,
+        "--episodes {}: expected 1 to {max} (one env each, about 126 KB per env)",
+        args.episodes
+    );
     let task: Perturbation = args.task.parse()?;
     // A policy trained on several tasks recalls the one asked for; a single-task
     // policy (the base policy) is evaluated on any perturbation.

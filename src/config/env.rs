@@ -208,6 +208,16 @@ impl EnvConfig {
             );
         }
         anyhow::ensure!(
+            self.motor_strength_range[0] > 0.0,
+            "env.motor_strength_range must be > 0 (a factor on the motors' gains), got {:?}",
+            self.motor_strength_range
+        );
+        anyhow::ensure!(
+            self.friction_range[0] >= 0.0,
+            "env.friction_range must be >= 0, got {:?}",
+            self.friction_range
+        );
+        anyhow::ensure!(
             self.noise_std >= 0.0 && self.noise_std.is_finite(),
             "env.noise_std must be finite and >= 0, got {}",
             self.noise_std

@@ -49,10 +49,19 @@ impl Config {
         Self::from_toml_str(&text).with_context(|| format!("in config {}", path.display()))
     }
 
-    /// Parses TOML text (no file name in the error; [`Config::load`] adds it).
+    /// Parses TOML text and checks every value (no file name in the error;
+    /// [`Config::load`] adds it).
     pub fn from_toml_str(text: &str) -> anyhow::Result<Self> {
         let cfg: Config = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+        cfg.validate()?;
         Ok(cfg)
+    }
+
+    /// Checks every table: ranges, finiteness, sizes that fit in memory. Errors name the key.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        self.env.validate()?;
+        self.net.validate()?;
+        self.ppo.validate()
     }
 
     /// The configuration as TOML, as it is written beside every result.
@@ -80,6 +89,22 @@ mod tests {
         let err = format!("{:#}", Config::load(&path).unwrap_err());
         assert!(err.contains("bad.toml"), "{err}");
         assert!(err.contains("sede"), "{err}");
+    }
+
+    #[test]
+    fn a_value_out_of_range_is_an_error_naming_the_file_and_the_key() {
+        let dir = tempfile::tempdir().unwrap();
+        for (text, key) in [
+            ("[ppo]\nnum_envs = 0\n", "ppo.num_envs"),
+            ("[net.critic]\nhidden = [0, 32]\n", "net.critic.hidden"),
+            ("[env]\nmotor_strength_range = [1.0, 0.5]\n", "env.motor_strength_range"),
+            ("[ppo]\nnum_envs = 100000000\n", "at most 16384"),
+        ] {
+            let path = dir.path().join("bad.toml");
+            std::fs::write(&path, text).unwrap();
+            let err = format!("{:#}", Config::load(&path).unwrap_err());
+            assert!(err.contains("bad.toml") && err.contains(key), "{text}: {err}");
+        }
     }
 
     #[test]

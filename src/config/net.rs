@@ -156,6 +156,13 @@ impl MaskConfig {
     }
 }
 
+/// The widest layer a network may have.
+pub const MAX_WIDTH: usize = 65_536;
+/// The most weights the hidden layers of one network may have (products of
+/// consecutive widths): each weight carries a mask, soft scores, a gradient
+/// and Adam's moments, about 40 bytes, so this is about 1.3 GB.
+pub const MAX_HIDDEN_WEIGHTS: usize = 1 << 25;
+
 /// Sizes and activation of one network.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -176,6 +183,21 @@ impl MlpConfig {
     fn paper(hidden: &[usize]) -> Self {
         Self { hidden: hidden.to_vec(), activation: Activation::Elu }
     }
+
+    /// Checks the widths; `name` is the table (`actor`, ...) for the message.
+    pub fn validate(&self, name: &str) -> anyhow::Result<()> {
+        anyhow::ensure!(!self.hidden.is_empty(), "net.{name}.hidden is empty: give at least one hidden layer");
+        if let Some(w) = self.hidden.iter().find(|&&w| w == 0 || w > MAX_WIDTH) {
+            anyhow::bail!("net.{name}.hidden = {:?}: the width {w} is not in 1..={MAX_WIDTH}", self.hidden);
+        }
+        let weights: usize = self.hidden.windows(2).map(|p| p[0] * p[1]).sum();
+        anyhow::ensure!(
+            weights <= MAX_HIDDEN_WEIGHTS,
+            "net.{name}.hidden = {:?} has {weights} hidden weights: at most {MAX_HIDDEN_WEIGHTS} (about 40 bytes each)",
+            self.hidden
+        );
+        Ok(())
+    }
 }
 
 /// Network sizes and the masked-network settings of the method.
@@ -192,6 +214,16 @@ pub struct NetConfig {
     pub mask: MaskConfig,
 }
 
+impl NetConfig {
+    /// Checks every network's widths and the mask settings; errors name the key.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        self.actor.validate("actor")?;
+        self.critic.validate("critic")?;
+        self.cenet.validate("cenet")?;
+        self.mask.validate()
+    }
+}
+
 impl Default for NetConfig {
     fn default() -> Self {
         Self {
@@ -206,6 +238,21 @@ impl Default for NetConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn widths_that_are_zero_or_cannot_fit_in_memory_are_errors_naming_the_network() {
+        NetConfig::default().validate().unwrap();
+        for (hidden, expect) in [
+            (vec![0, 32], "net.critic.hidden = [0, 32]"),
+            (vec![], "net.critic.hidden is empty"),
+            (vec![1 << 20], "not in 1..=65536"),
+            (vec![60_000, 60_000], "hidden weights: at most"),
+        ] {
+            let cfg = NetConfig { critic: MlpConfig::paper(&hidden), ..NetConfig::default() };
+            let err = cfg.validate().unwrap_err().to_string();
+            assert!(err.contains(expect), "{hidden:?}: {err}");
+        }
+    }
 
     #[test]
     fn non_finite_mask_settings_are_errors_naming_the_key() {

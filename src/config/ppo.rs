@@ -4,9 +4,21 @@
 //! (Nahrendra et al. 2023) for the CENet; every key can be set from the
 //! `[ppo]` table of a TOML file under `scenes/`.
 
+use super::net::MAX_WIDTH;
 use serde::{Deserialize, Serialize};
 
 /// PPO with a privileged critic and a context estimator.
+/// The most environments one batch may have (`ppo.num_envs`, `[eval] episodes`,
+/// `quadcl eval --episodes`): each holds a rapier world and its buffers, about
+/// 126 KB (measured: 64 envs 47 MB, 1024 envs 167 MB resident), so this is about 2 GB.
+pub const MAX_ENVS: usize = 16_384;
+/// The most transitions one rollout may hold (`num_envs * steps_per_env`):
+/// about 1.8 KB each with the observation history, so about 1.9 GB.
+pub const MAX_ROLLOUT: usize = 1 << 20;
+/// The most iterations a training may ask for: the curves keep a row per
+/// iteration, and at 0.1 s an iteration this is over eleven days.
+pub const MAX_ITERATIONS: usize = 10_000_000;
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PpoConfig {
@@ -159,6 +171,31 @@ impl PpoConfig {
             anyhow::ensure!(value > 0, "ppo.{key} must be > 0, got {value}");
         }
         anyhow::ensure!(
+            self.num_envs <= MAX_ENVS,
+            "ppo.num_envs = {}: at most {MAX_ENVS} (each env holds about 126 KB of physics state)",
+            self.num_envs
+        );
+        anyhow::ensure!(
+            self.batch_size() <= MAX_ROLLOUT,
+            "ppo.num_envs * ppo.steps_per_env = {} transitions: at most {MAX_ROLLOUT} (about 1.8 KB each)",
+            self.batch_size()
+        );
+        anyhow::ensure!(
+            self.iterations <= MAX_ITERATIONS,
+            "ppo.iterations = {}: at most {MAX_ITERATIONS}",
+            self.iterations
+        );
+        anyhow::ensure!(
+            self.cenet_decoder_hidden.iter().all(|&w| w > 0 && w <= MAX_WIDTH),
+            "ppo.cenet_decoder_hidden = {:?}: every width must be in 1..={MAX_WIDTH}",
+            self.cenet_decoder_hidden
+        );
+        anyhow::ensure!(
+            self.cenet_latent_dim <= MAX_WIDTH,
+            "ppo.cenet_latent_dim = {}: at most {MAX_WIDTH}",
+            self.cenet_latent_dim
+        );
+        anyhow::ensure!(
             self.minibatches <= self.batch_size(),
             "ppo.minibatches ({}) must not exceed num_envs * steps_per_env ({})",
             self.minibatches,
@@ -206,6 +243,20 @@ mod tests {
         assert_eq!((cfg.epochs, cfg.minibatches, cfg.steps_per_env), (5, 4, 24));
         assert_eq!(cfg.batch_size(), 256 * 24);
         assert_eq!(cfg.minibatch_size(), 256 * 24 / 4);
+    }
+
+    #[test]
+    fn sizes_that_cannot_fit_in_memory_are_errors_giving_the_limit() {
+        for (key, cfg) in [
+            ("ppo.num_envs", PpoConfig { num_envs: 100_000_000, ..PpoConfig::default() }),
+            ("transitions", PpoConfig { num_envs: 4096, steps_per_env: 1_000_000, ..PpoConfig::default() }),
+            ("ppo.iterations", PpoConfig { iterations: usize::MAX, ..PpoConfig::default() }),
+            ("ppo.cenet_decoder_hidden", PpoConfig { cenet_decoder_hidden: vec![1 << 30], ..PpoConfig::default() }),
+            ("ppo.cenet_decoder_hidden", PpoConfig { cenet_decoder_hidden: vec![0], ..PpoConfig::default() }),
+        ] {
+            let err = cfg.validate().unwrap_err().to_string();
+            assert!(err.contains(key) && err.contains("at most") || err.contains("1..="), "{key}: {err}");
+        }
     }
 
     #[test]

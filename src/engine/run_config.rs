@@ -111,6 +111,7 @@ impl RunConfig {
             }
         }
         let config: Config = toml::Value::Table(table).try_into().map_err(|e| anyhow::anyhow!("{e}"))?;
+        config.validate()?;
         if !sequence_table.contains_key("task") {
             anyhow::bail!("the run has no [[task]] entries");
         }
@@ -139,6 +140,12 @@ impl RunConfig {
             None => EvalConfig::default(),
         };
         anyhow::ensure!(eval.episodes > 0, "[eval] episodes must be at least 1");
+        anyhow::ensure!(
+            eval.episodes <= crate::config::ppo::MAX_ENVS,
+            "[eval] episodes = {}: at most {} (one env each, about 126 KB per env)",
+            eval.episodes,
+            crate::config::ppo::MAX_ENVS
+        );
         let run: RunSection = match run_value {
             Some(v) => v.try_into().map_err(|e| anyhow::anyhow!("in [run]: {e}"))?,
             None => RunSection::default(),

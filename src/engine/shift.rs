@@ -21,6 +21,10 @@ use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
 
+/// The longest action latency a shift may ask for, seconds: each delayed step
+/// holds every env's actions, and no robot waits this long.
+pub const MAX_LATENCY_S: f32 = 10.0;
+
 /// A shifted environment (every field optional; unset ones keep the policy's).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -73,8 +77,8 @@ impl Shift {
             anyhow::ensure!(lo > 0.0, "motor_strength must be > 0");
         }
         anyhow::ensure!(
-            self.latency_s >= 0.0 && self.latency_s.is_finite(),
-            "latency_s = {}: expected >= 0",
+            self.latency_s >= 0.0 && self.latency_s <= MAX_LATENCY_S,
+            "latency_s = {}: expected a value in [0, {MAX_LATENCY_S}] seconds",
             self.latency_s
         );
         anyhow::ensure!(self.iterations > 0, "iterations must be at least 1");

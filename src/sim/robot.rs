@@ -167,6 +167,14 @@ impl RobotModel {
                 joints.push(leg_joint(&urdf, j, &mut warnings)?);
             }
             let calf = joints.last().expect("three joints per leg").child_link;
+            // A massless leaf makes the multibody's mass matrix singular (MuJoCo refuses it too).
+            if urdf.links[calf].inertial.mass.value <= 0.0 {
+                bail!(
+                    "calf link '{}' (leg {}) has no mass, nor any link fixed to it: give it an <inertial>",
+                    urdf.links[calf].name,
+                    leg.name()
+                );
+            }
             feet.push(foot_of(&urdf, calf, &merged, &robot.foot_links).with_context(|| format!("leg {}", leg.name()))?);
         }
         // rapier3d-urdf limits a revolute joint to its <limit> range (here [0, 0]): make it continuous.

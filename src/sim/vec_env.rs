@@ -67,6 +67,10 @@ impl VecEnv {
         if num_envs == 0 {
             bail!("a VecEnv needs at least one env");
         }
+        let max = crate::config::ppo::MAX_ENVS;
+        if num_envs > max {
+            bail!("a batch of {num_envs} envs: at most {max} (about 126 KB each)");
+        }
         let robot = Arc::new(robot.clone());
         let envs = (0..num_envs)
             .into_par_iter()
