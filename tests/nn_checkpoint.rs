@@ -209,3 +209,27 @@ fn log_sigma_round_trips_exactly_and_files_with_the_older_sigma_tensor_still_loa
     let err = load_error(dir.path());
     assert!(err.contains("missing tensor net.l0.log_sigma"), "{err}");
 }
+
+#[test]
+fn a_manifest_edited_after_it_was_written_is_an_error_not_a_different_policy() {
+    type ManifestEdit = fn(&mut serde_json::Value);
+    let cases: [ManifestEdit; 4] = [
+        |m| m["tasks"][0] = "invert:RR".into(),
+        |m| m["networks"][0]["mask"]["capacity"] = 0.5.into(),
+        |m| m["config"] = serde_json::json!({"seed": 9}),
+        |m| m["extras"] = serde_json::json!([]),
+    ];
+    for (i, edit) in cases.into_iter().enumerate() {
+        let dir = tempfile::tempdir().unwrap();
+        trained_policy(dir.path());
+        load_policy(dir.path()).unwrap();
+        edit_manifest(dir.path(), edit);
+        let err = load_error(dir.path());
+        assert!(err.contains(MANIFEST_FILE) && err.contains("changed after it was written"), "case {i}: {err}");
+    }
+    // Rewriting the same content in another layout is not an edit.
+    let dir = tempfile::tempdir().unwrap();
+    trained_policy(dir.path());
+    edit_manifest(dir.path(), |_| {});
+    load_policy(dir.path()).unwrap();
+}

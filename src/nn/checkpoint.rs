@@ -11,12 +11,15 @@
 //! - `masks.safetensors`: "{layer}.mask.{t}" u8 (ceil(out*in/8),), bit-packed row-major;
 //! - `manifest.json`: format version, task names, networks (sizes, activation,
 //!   mask settings, layer shapes, task in progress), the run's config, and
-//!   the sha256 of both tensor files.
+//!   the sha256 of both tensor files; `model.safetensors`' metadata holds the
+//!   sha256 of the rest of the manifest (`manifest_digest`), so an edited
+//!   manifest is refused.
 //!
 //! Every write is atomic; loading checks version, hashes, dtypes and shapes,
 //! and reports a corrupt or mismatched file as an error naming it.
 
 use super::bitmask::BitMask;
+use super::manifest_digest::{check as check_manifest_digest, manifest_digest, metadata as digest_metadata};
 use super::masked::{var_values, MaskedLinear, Training};
 use super::mlp::MaskedMlp;
 use super::state::{ElementState, TaskId};
@@ -101,12 +104,15 @@ fn f32_raw(values: &[f32], shape: Vec<usize>) -> Raw {
     Raw { dtype: Dtype::F32, shape, bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect() }
 }
 
-fn serialize(tensors: &BTreeMap<String, Raw>) -> anyhow::Result<Vec<u8>> {
+fn serialize(
+    tensors: &BTreeMap<String, Raw>,
+    metadata: Option<std::collections::HashMap<String, String>>,
+) -> anyhow::Result<Vec<u8>> {
     let views = tensors
         .iter()
         .map(|(k, r)| Ok((k.clone(), safetensors::tensor::TensorView::new(r.dtype, r.shape.clone(), &r.bytes)?)))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    Ok(safetensors::serialize(views, None)?)
+    Ok(safetensors::serialize(views, metadata)?)
 }
 
 /// Writes a policy directory (creating it). `tasks` names every TaskId the networks use.
@@ -181,20 +187,23 @@ pub fn save_policy(
         let v = t.flatten_all()?.to_dtype(candle_core::DType::F32)?.to_vec1::<f32>()?;
         model.insert(format!("extra.{name}"), f32_raw(&v, t.dims().to_vec()));
     }
-    let model_bytes = serialize(&model)?;
-    let mask_bytes = serialize(&masks)?;
-    let files = BTreeMap::from([
-        (MODEL_FILE.to_string(), sha256_hex(&model_bytes)),
-        (MASKS_FILE.to_string(), sha256_hex(&mask_bytes)),
-    ]);
-    let manifest = Manifest {
+    let mut manifest = Manifest {
         format_version: FORMAT_VERSION,
         tasks: tasks.to_vec(),
         networks: entries,
         extras: extras.keys().cloned().collect(),
         config: config.clone(),
-        files,
+        files: BTreeMap::new(),
     };
+    // The model file records the manifest's digest; the manifest then records the files' hashes.
+    // Through text, as a loader will see it (an f32 goes to JSON as its shortest decimal).
+    let digest = manifest_digest(&serde_json::from_str(&serde_json::to_string(&manifest)?)?);
+    let model_bytes = serialize(&model, Some(digest_metadata(digest)))?;
+    let mask_bytes = serialize(&masks, None)?;
+    manifest.files = BTreeMap::from([
+        (MODEL_FILE.to_string(), sha256_hex(&model_bytes)),
+        (MASKS_FILE.to_string(), sha256_hex(&mask_bytes)),
+    ]);
     write_atomic(&dir.join(MODEL_FILE), &model_bytes)?;
     write_atomic(&dir.join(MASKS_FILE), &mask_bytes)?;
     // The manifest goes last: it names the hashes of the files written before it.
@@ -282,8 +291,10 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
     let manifest_path = dir.join(MANIFEST_FILE);
     let text =
         std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
-    let manifest: Manifest =
+    let manifest_json: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
+    let manifest: Manifest = serde_json::from_value(manifest_json.clone())
+        .with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
     ensure!(
         manifest.format_version == FORMAT_VERSION,
         "{}: format version {} is not supported (this build reads {FORMAT_VERSION})",
@@ -432,5 +443,7 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
         let shape = model.shape_of(&key)?;
         extras.insert(name.clone(), Tensor::from_vec(model.f32s(&key, &shape)?, shape, &Device::Cpu)?);
     }
+    // Last, so that a manifest edited into an inconsistent state gets the more specific error above.
+    check_manifest_digest(&model_bytes, &manifest_json, &manifest_path)?;
     Ok(Policy { tasks: manifest.tasks, networks, extras, config: manifest.config })
 }

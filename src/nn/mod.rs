@@ -17,6 +17,7 @@ mod bitmask;
 pub mod checkpoint;
 mod element_view;
 mod fused;
+mod manifest_digest;
 mod masked;
 mod masked_weight;
 mod mlp;
