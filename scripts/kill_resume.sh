@@ -36,8 +36,8 @@ for try in $(seq 1 "$tries"); do
   while true; do
     "$bin" run --config "$dir/run.toml" --out "$out" $resume > /dev/null 2> "$dir/stderr" &
     pid=$!
-    # A random point within the run's length (about two in three kills land before its end).
-    delay=$(awk -v r="$RANDOM" -v f="$full" 'BEGIN { printf "%.3f", r / 32767 * f * 1.5 }')
+    # A random point within the run's first 90 %.
+    delay=$(awk -v r="$RANDOM" -v f="$full" 'BEGIN { printf "%.3f", r / 32767 * f * 0.9 }')
     if [ "$kills" -lt 2 ] && { [ "$kills" -eq 0 ] || [ $((RANDOM % 2)) -eq 0 ]; }; then
       sleep "$delay"
       if kill -9 "$pid" 2>/dev/null; then
