@@ -34,12 +34,7 @@ pub struct EvalArgs {
 }
 
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
-    let max = quadcl::config::ppo::MAX_ENVS;
-    anyhow::ensure!(
-        args.episodes > 0 && args.episodes <= max,
-        "--episodes {}: expected 1 to {max} (one env each, about 126 KB per env)",
-        args.episodes
-    );
+    quadcl::config::ppo::check_env_count("--episodes", args.episodes)?;
     let task: Perturbation = args.task.parse()?;
     // A policy trained on several tasks recalls the one asked for; a single-task
     // policy (the base policy) is evaluated on any perturbation.

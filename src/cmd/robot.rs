@@ -94,11 +94,12 @@ pub fn run(args: RobotArgs) -> anyhow::Result<()> {
 fn env_of(path: &std::path::Path) -> anyhow::Result<EnvConfig> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading config {}", path.display()))?;
     let value: toml::Table = toml::from_str(&text).with_context(|| format!("in config {}", path.display()))?;
-    if value.contains_key("task") {
-        Ok(quadcl::engine::RunConfig::load(path)?.config.env)
+    let env = if value.contains_key("task") {
+        quadcl::engine::RunConfig::from_toml_str(&text).map(|run| run.config.env)
     } else {
-        Ok(quadcl::config::Config::load(path)?.env)
-    }
+        quadcl::config::Config::from_toml_str(&text).map(|cfg| cfg.env)
+    };
+    env.with_context(|| format!("in config {}", path.display()))
 }
 
 fn report(env: &EnvConfig, robot: &RobotModel, stand: StandReport) -> anyhow::Result<Report> {

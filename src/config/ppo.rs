@@ -7,7 +7,6 @@
 use super::net::MAX_WIDTH;
 use serde::{Deserialize, Serialize};
 
-/// PPO with a privileged critic and a context estimator.
 /// The most environments one batch may have (`ppo.num_envs`, `[eval] episodes`,
 /// `quadcl eval --episodes`): each holds a rapier world and its buffers, about
 /// 126 KB (measured: 64 envs 47 MB, 1024 envs 167 MB resident), so this is about 2 GB.
@@ -19,6 +18,19 @@ pub const MAX_ROLLOUT: usize = 1 << 20;
 /// iteration, and at 0.1 s an iteration this is over eleven days.
 pub const MAX_ITERATIONS: usize = 10_000_000;
 
+/// Checks a count of environments (`what` names the key or option): at
+/// least 1 and at most [`MAX_ENVS`]. Every place a batch size comes from
+/// (`ppo.num_envs`, `[eval] episodes`, `quadcl eval --episodes`, a `VecEnv`)
+/// checks it here.
+pub fn check_env_count(what: &str, n: usize) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (1..=MAX_ENVS).contains(&n),
+        "{what} = {n}: expected at least 1 and at most {MAX_ENVS} (an env holds about 126 KB of physics state)"
+    );
+    Ok(())
+}
+
+/// PPO with a privileged critic and a context estimator.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PpoConfig {
@@ -160,8 +172,8 @@ impl PpoConfig {
     /// Checks the settings that would make training meaningless or panic.
     /// Errors name the key and the expectation.
     pub fn validate(&self) -> anyhow::Result<()> {
+        check_env_count("ppo.num_envs", self.num_envs)?;
         let positive = [
-            ("num_envs", self.num_envs),
             ("steps_per_env", self.steps_per_env),
             ("epochs", self.epochs),
             ("minibatches", self.minibatches),
@@ -170,11 +182,6 @@ impl PpoConfig {
         for (key, value) in positive {
             anyhow::ensure!(value > 0, "ppo.{key} must be > 0, got {value}");
         }
-        anyhow::ensure!(
-            self.num_envs <= MAX_ENVS,
-            "ppo.num_envs = {}: at most {MAX_ENVS} (each env holds about 126 KB of physics state)",
-            self.num_envs
-        );
         anyhow::ensure!(
             self.batch_size() <= MAX_ROLLOUT,
             "ppo.num_envs * ppo.steps_per_env = {} transitions: at most {MAX_ROLLOUT} (about 1.8 KB each)",
@@ -255,7 +262,7 @@ mod tests {
             ("ppo.cenet_decoder_hidden", PpoConfig { cenet_decoder_hidden: vec![0], ..PpoConfig::default() }),
         ] {
             let err = cfg.validate().unwrap_err().to_string();
-            assert!(err.contains(key) && err.contains("at most") || err.contains("1..="), "{key}: {err}");
+            assert!(err.contains(key) && (err.contains("at most") || err.contains("1..=")), "{key}: {err}");
         }
     }
 

@@ -139,13 +139,7 @@ impl RunConfig {
             Some(v) => v.try_into().map_err(|e| anyhow::anyhow!("in [eval]: {e}"))?,
             None => EvalConfig::default(),
         };
-        anyhow::ensure!(eval.episodes > 0, "[eval] episodes must be at least 1");
-        anyhow::ensure!(
-            eval.episodes <= crate::config::ppo::MAX_ENVS,
-            "[eval] episodes = {}: at most {} (one env each, about 126 KB per env)",
-            eval.episodes,
-            crate::config::ppo::MAX_ENVS
-        );
+        crate::config::ppo::check_env_count("[eval] episodes", eval.episodes)?;
         let run: RunSection = match run_value {
             Some(v) => v.try_into().map_err(|e| anyhow::anyhow!("in [run]: {e}"))?,
             None => RunSection::default(),

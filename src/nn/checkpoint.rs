@@ -293,7 +293,7 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
         std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
     let manifest_json: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
-    let manifest: Manifest = serde_json::from_value(manifest_json.clone())
+    let manifest = Manifest::deserialize(&manifest_json)
         .with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
     ensure!(
         manifest.format_version == FORMAT_VERSION,

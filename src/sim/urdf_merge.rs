@@ -125,7 +125,7 @@ fn tensor(i: &Inertia) -> Mat {
 }
 
 /// URDF's fixed-axis roll-pitch-yaw: R = Rz(yaw) Ry(pitch) Rx(roll).
-pub(super) fn rotation([r, p, y]: [f64; 3]) -> Mat {
+fn rotation([r, p, y]: [f64; 3]) -> Mat {
     let (sr, cr, sp, cp, sy, cy) = (r.sin(), r.cos(), p.sin(), p.cos(), y.sin(), y.cos());
     [
         [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
@@ -149,7 +149,7 @@ fn mul(a: &Mat, b: &Mat) -> Mat {
     std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
 }
 
-pub(super) fn mul_vec(a: &Mat, v: [f64; 3]) -> [f64; 3] {
+fn mul_vec(a: &Mat, v: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|i| (0..3).map(|k| a[i][k] * v[k]).sum())
 }
 

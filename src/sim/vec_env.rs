@@ -64,13 +64,7 @@ impl VecEnv {
         num_envs: usize,
         seed: u64,
     ) -> anyhow::Result<Self> {
-        if num_envs == 0 {
-            bail!("a VecEnv needs at least one env");
-        }
-        let max = crate::config::ppo::MAX_ENVS;
-        if num_envs > max {
-            bail!("a batch of {num_envs} envs: at most {max} (about 126 KB each)");
-        }
+        crate::config::ppo::check_env_count("the batch's env count", num_envs)?;
         let robot = Arc::new(robot.clone());
         let envs = (0..num_envs)
             .into_par_iter()
