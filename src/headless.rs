@@ -28,7 +28,7 @@ impl Observer for ProgressObserver {
 }
 
 /// How a headless run goes.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     /// Continue the run already in the output folder from its last completed task.
     pub resume: bool,
@@ -38,14 +38,16 @@ pub struct RunOptions {
     pub stop_after: Option<usize>,
     /// Record one evaluation episode of every learned task after each task (MCAP, `DIR/episodes/`).
     pub record: bool,
+    /// Train with this method instead of the run file's (`--method`).
+    pub method: Option<String>,
 }
 
 /// Runs (or, with `resume`, continues) the run file `config` into `out`.
 /// Every check (config, existing results, checkpoint) happens before anything is written.
 pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<MetricsFile> {
-    let RunOptions { resume, progress, stop_after, record } = options;
+    let RunOptions { resume, progress, stop_after, record, method } = options;
     let mode = if resume { OpenMode::Resume } else { OpenMode::New };
-    let mut runner = Runner::open(config, out, mode, !progress)?;
+    let mut runner = Runner::open_with_method(config, out, mode, !progress, method.as_deref())?;
     runner.record_episodes(record)?;
     let session = runner.session();
     let sequence = session.sequence();

@@ -131,3 +131,24 @@ fn a_run_with_record_keeps_one_mcap_episode_of_every_learned_task_after_each_ste
     );
     assert!(err.contains("--record") && err.contains("toy"), "{err}");
 }
+
+#[test]
+fn every_baseline_runs_the_smoke_sequence_on_dense_networks_and_its_checkpoints_evaluate() {
+    let tmp = tempfile::tempdir().unwrap();
+    for method in ["finetune", "ewc", "si"] {
+        let out = tmp.path().join(method);
+        let m = run(&smoke(), &out, RunOptions { method: Some(method.into()), ..Default::default() }).unwrap();
+        assert_eq!((m.completed_steps, m.method.as_str()), (3, method));
+        let json = assert_metrics_json_complete(&out);
+        assert_eq!(json["method_settings"].is_object(), method != "finetune", "{method}");
+        assert!(m.summary.average_performance.is_some_and(f64::is_finite), "{method}");
+        let last = out.join("checkpoints/step-02-noise_FR");
+        let report = quadcl::nn::MaskReport::of_policy(&last).unwrap();
+        let trunk = &report.networks[0].layers[0];
+        assert_eq!((trunk.vacant, trunk.per_task.len()), (0, 3), "{method}: the trunk is shared by every task");
+        for name in &m.tasks {
+            let loaded = quadcl::rl::load_policy(&last, Some(name)).unwrap();
+            assert_eq!(loaded.agent.network_kind(), quadcl::nn::NetworkKind::Dense);
+        }
+    }
+}

@@ -142,8 +142,8 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
 
     let private = |p: &quadcl::rl::LoadedPolicy| -> usize {
         p.agent
-            .networks()
-            .iter()
+            .masked_networks()
+            .into_iter()
             .flat_map(|n| n.layers())
             .map(|l| l.states().iter().filter(|s| matches!(s, ElementState::Private(_))).count())
             .sum()
@@ -156,7 +156,7 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
         p.agent.actor().forward_task(0, &x).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap()
     };
     assert_eq!(out(&first), out(&ended), "the task's recall is unchanged");
-    for (a, b) in first.agent.networks().iter().zip(ended.agent.networks()) {
+    for (a, b) in first.agent.masked_networks().into_iter().zip(ended.agent.masked_networks()) {
         for (la, lb) in a.layers().iter().zip(b.layers()) {
             assert_eq!(la.task_mask(0), lb.task_mask(0), "{}", la.name());
         }

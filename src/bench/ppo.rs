@@ -4,8 +4,9 @@
 //!
 //! Configuration (compiled in, so the bench runs from any folder):
 //! `scenes/train-base.toml`, the full method (masked actor and critic,
-//! CENet), keys `ppo_*`. (The like-for-like dense configuration of issue 15
-//! needs a dense network type, which does not exist yet.)
+//! CENet), keys `ppo_*`; `scenes/train-dense.toml`, like for like with a lean
+//! Python PPO (dense actor and critic, no CENet, 4 minibatches), keys
+//! `ppo_dense_*` and the headline `ppo_env_steps_per_s_dense`.
 //!
 //! Keys per configuration: `env_steps_per_s` (env steps of the measured
 //! iterations over their wall time), `iteration_ms` (mean), the split per
@@ -24,8 +25,15 @@ const WARM_UP: usize = 2;
 const MIN_ITERATIONS: usize = 10;
 
 /// The configurations measured: (key prefix, headline key, run file text, its name).
-const CONFIGS: [(&str, &str, &str, &str); 1] =
-    [("ppo", "ppo_env_steps_per_s", include_str!("../../scenes/train-base.toml"), "scenes/train-base.toml")];
+const CONFIGS: [(&str, &str, &str, &str); 2] = [
+    ("ppo", "ppo_env_steps_per_s", include_str!("../../scenes/train-base.toml"), "scenes/train-base.toml"),
+    (
+        "ppo_dense",
+        "ppo_env_steps_per_s_dense",
+        include_str!("../../scenes/train-dense.toml"),
+        "scenes/train-dense.toml",
+    ),
+];
 
 /// Mean milliseconds per iteration of the per-iteration seconds under `key`.
 fn mean_ms(rows: &[quadcl::rl::Metrics], key: &str) -> f64 {

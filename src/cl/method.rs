@@ -1,13 +1,43 @@
-//! A continual-learning method as a set of hooks around one training loop
-//! (Avalanche's plugins, Continual World's `sac.py` hooks): each hook does
-//! nothing by default. `ours` needs only [`ContinualMethod::task_mask_config`]
-//! (everything else happens in the masked networks); a baseline such as EWC
-//! will add a penalty (a loss hook and its own state, not here yet) and
-//! compute importances in [`ContinualMethod::on_task_end`].
+//! A continual-learning method as a set of hooks (Avalanche's plugins,
+//! Continual World's `sac.py` hooks), each doing nothing by default, at two
+//! levels: around a task's training loop ([`ContinualMethod`], held by the
+//! engine's session), and inside the learner's update ([`UpdateHooks`] of
+//! `rl/update_hooks.rs`, which the method hands to the learner). `ours` needs
+//! only [`ContinualMethod::task_mask_config`] (everything else happens in the
+//! masked networks); EWC and SI train dense networks and add a penalty
+//! through their update hooks.
+//!
+//! The methods' settings are the run file's `[method.NAME]` tables
+//! ([`MethodSettings`]); every table parses whatever the method, so a run
+//! switches method by changing one word.
 
+use super::ewc::{Ewc, EwcConfig};
+use super::finetune::Finetune;
 use super::ours::{Ours, Switches};
+use super::si::{Si, SiConfig};
 use crate::config::net::MaskConfig;
-use crate::nn::TaskId;
+use crate::nn::{NetworkKind, TaskId};
+use crate::rl::{NoHooks, UpdateHooks};
+use serde::{Deserialize, Serialize};
+
+/// The implemented methods' names.
+pub const METHODS: [&str; 4] = ["ours", "finetune", "ewc", "si"];
+
+/// Every method's settings: `[method.ewc]`, `[method.si]` (`ours`' switches are `[method]`'s own keys).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MethodSettings {
+    pub ewc: EwcConfig,
+    pub si: SiConfig,
+}
+
+impl MethodSettings {
+    /// Errors name the table and key.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        self.ewc.validate()?;
+        self.si.validate()
+    }
+}
 
 /// Hooks the engine calls around a task's training; all default to nothing.
 pub trait ContinualMethod: Send {
@@ -18,6 +48,21 @@ pub trait ContinualMethod: Send {
     /// the run's `base` settings and the switches in force for that task.
     fn task_mask_config(&self, base: &MaskConfig, _switches: &Switches) -> anyhow::Result<MaskConfig> {
         Ok(base.clone())
+    }
+
+    /// The method's settings as JSON (`metrics.json`); null when it has none.
+    fn settings(&self) -> serde_json::Value {
+        serde_json::Value::Null
+    }
+
+    /// The networks the method trains: masked (`ours`) or dense (the other baselines).
+    fn network_kind(&self) -> NetworkKind {
+        NetworkKind::Masked
+    }
+
+    /// The hooks the learner calls inside its update (fresh state: nothing learned yet).
+    fn update_hooks(&self) -> Box<dyn UpdateHooks> {
+        Box::new(NoHooks)
     }
 
     /// Called before a task's first iteration.
@@ -36,11 +81,14 @@ pub trait ContinualMethod: Send {
     }
 }
 
-/// The method named in a run file. Only `ours` exists so far; the error lists what does.
-pub fn method_by_name(name: &str) -> anyhow::Result<Box<dyn ContinualMethod>> {
+/// The method named in a run file, with its settings; an unknown name is an error listing the known ones.
+pub fn method_by_name(name: &str, settings: &MethodSettings) -> anyhow::Result<Box<dyn ContinualMethod>> {
     match name {
         "ours" => Ok(Box::new(Ours)),
-        other => anyhow::bail!("unknown method {other:?}: the implemented methods are [\"ours\"]"),
+        "finetune" => Ok(Box::new(Finetune)),
+        "ewc" => Ok(Box::new(Ewc { cfg: settings.ewc.clone() })),
+        "si" => Ok(Box::new(Si { cfg: settings.si.clone() })),
+        other => anyhow::bail!("unknown method {other:?}: the implemented methods are {METHODS:?}"),
     }
 }
 
@@ -50,8 +98,20 @@ mod tests {
 
     #[test]
     fn an_unknown_method_is_an_error_listing_the_known_ones() {
-        let err = method_by_name("ewc").err().unwrap().to_string();
-        assert!(err.contains("ewc") && err.contains("ours"), "{err}");
-        assert_eq!(method_by_name("ours").unwrap().name(), "ours");
+        let settings = MethodSettings::default();
+        let err = method_by_name("packnet", &settings).err().unwrap().to_string();
+        assert!(err.contains("packnet") && err.contains("ours") && err.contains("ewc"), "{err}");
+        for name in METHODS {
+            assert_eq!(method_by_name(name, &settings).unwrap().name(), name);
+        }
+    }
+
+    #[test]
+    fn only_ours_trains_masked_networks() {
+        let settings = MethodSettings::default();
+        for name in METHODS {
+            let kind = method_by_name(name, &settings).unwrap().network_kind();
+            assert_eq!(kind == NetworkKind::Masked, name == "ours", "{name}");
+        }
     }
 }

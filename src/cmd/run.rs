@@ -1,4 +1,4 @@
-//! `quadcl run --config FILE --out DIR [--resume]`: trains a task sequence
+//! `quadcl run --config FILE --out DIR [--method NAME] [--resume]`: trains a task sequence
 //! headless (see `headless`), then prints the summary measures.
 
 use clap::Args;
@@ -22,6 +22,10 @@ pub struct RunArgs {
     /// After each task, record one evaluation episode of every learned task into DIR/episodes/ (`mcap`: Foxglove).
     #[arg(long, value_parser = ["mcap"])]
     pub record: Option<String>,
+    /// Train with this method instead of the run file's [method] name: ours, finetune, ewc, si
+    /// (its settings still come from the file's [method.NAME] table). Give it again with --resume.
+    #[arg(long)]
+    pub method: Option<String>,
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
@@ -33,6 +37,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             progress: std::io::stderr().is_terminal(),
             stop_after: args.stop_after,
             record: args.record.is_some(),
+            method: args.method.clone(),
         },
     )?;
     let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));

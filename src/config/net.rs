@@ -156,6 +156,24 @@ impl MaskConfig {
     }
 }
 
+/// Which kind of network a method trains.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NetworkKind {
+    /// Masked layers over shared weights (METHOD.md 2).
+    #[default]
+    Masked,
+    /// A dense trunk shared by all tasks, one output head per task (METHOD.md 3).
+    Dense,
+}
+
+impl NetworkKind {
+    /// Whether it is the default (masked): `[net] kind` is then left out of saved configs.
+    pub fn is_masked(&self) -> bool {
+        *self == Self::Masked
+    }
+}
+
 /// The widest layer a network may have.
 pub const MAX_WIDTH: usize = 65_536;
 /// The most weights the hidden layers of one network may have (products of
@@ -212,6 +230,10 @@ pub struct NetConfig {
     pub cenet: MlpConfig,
     /// Mask settings shared by every masked network.
     pub mask: MaskConfig,
+    /// `masked` (the method) or `dense` (a shared trunk, one head per task: the baselines'
+    /// network, and `quadcl train`'s like-for-like PPO). In a run file the method decides.
+    #[serde(skip_serializing_if = "NetworkKind::is_masked")]
+    pub kind: NetworkKind,
 }
 
 impl NetConfig {
@@ -231,6 +253,7 @@ impl Default for NetConfig {
             critic: MlpConfig::paper(&[512, 256, 128]),
             cenet: MlpConfig::paper(&[256, 128]),
             mask: MaskConfig::default(),
+            kind: NetworkKind::Masked,
         }
     }
 }

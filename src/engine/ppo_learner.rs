@@ -11,17 +11,19 @@
 //! Checkpoints are policy directories that `rl::load_policy` and `quadcl eval`
 //! read: extras `log_std.t{t}`, `obs_normalizer.t{t}.{mean,var,count}`,
 //! `privileged_normalizer.t{t}.{...}` for every learned task t, plus
-//! `engine.last_task` (the task whose state the next task starts from).
+//! `engine.last_task` (the task whose state the next task starts from), and
+//! the method's state as `method.*` (its [`UpdateHooks::state`]).
 
 use super::learner::{Evaluation, Learner, TaskStart};
 use super::run_config::RunConfig;
 use crate::config::net::MaskConfig;
 use crate::config::{Config, EnvConfig};
 use crate::nn::{
-    checkpoint, mask_report, mask_views, transfer_lift, LayerLift, LayerView, MaskReport, MaskedMlp, TaskId,
+    checkpoint, mask_report, mask_views, transfer_lift, LayerLift, LayerView, MaskReport, NetworkKind, TaskId,
 };
 use crate::rl::{
-    metric_names, Agent, Metrics, PolicyInfo, PpoLearner, RunningNormalizer, SimTrainEnv, TrainEnv, TrainingClock,
+    metric_names, Agent, Metrics, NoHooks, PolicyInfo, PpoLearner, RunningNormalizer, SimTrainEnv, TrainEnv,
+    TrainingClock, UpdateHooks,
 };
 use crate::sim::Perturbation;
 use crate::util::{derive_seed, Stream};
@@ -32,6 +34,8 @@ use std::path::Path;
 use std::str::FromStr;
 
 const LAST_TASK_KEY: &str = "engine.last_task";
+/// Checkpoint extras of the method's state are `{METHOD_PREFIX}{its key}`.
+pub const METHOD_PREFIX: &str = "method.";
 
 /// What task t needs for exact recall besides the networks.
 #[derive(Debug, Clone)]
@@ -60,6 +64,10 @@ pub struct PpoTaskLearner {
     /// Action latency in control steps (sim-to-real fine-tuning).
     latency_steps: usize,
     eval_episodes: usize,
+    /// Masked (`ours`) or dense (the non-mask baselines) networks.
+    kind: NetworkKind,
+    /// The method inside the update.
+    hooks: Box<dyn UpdateHooks>,
     /// The agent between tasks (None while `training` holds it).
     agent: Option<Agent>,
     training: Option<(PpoLearner, Box<dyn TrainEnv + Send>, TaskId)>,
@@ -72,7 +80,9 @@ pub struct PpoTaskLearner {
 
 /// The PPO learner of a run file, and the tasks of its base policy (if any).
 pub fn make_ppo_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<String>)> {
-    let mut learner = PpoTaskLearner::new(&cfg.config, cfg.eval.episodes)?;
+    let method = crate::cl::method_by_name(&cfg.method, &cfg.method_settings)?;
+    let mut learner = PpoTaskLearner::new_of_kind(&cfg.config, cfg.eval.episodes, method.network_kind())?
+        .with_hooks(method.update_hooks());
     let learned = match &cfg.run.base_policy {
         Some(dir) => learner.load(dir).with_context(|| format!("loading the base policy {}", dir.display()))?,
         None => Vec::new(),
@@ -87,13 +97,20 @@ fn dims_probe(env: &EnvConfig) -> anyhow::Result<crate::rl::EnvDims> {
 impl PpoTaskLearner {
     /// Fresh networks for `config` (seeded from `config.seed`); evaluations use `eval_episodes` envs.
     pub fn new(config: &Config, eval_episodes: usize) -> anyhow::Result<Self> {
+        Self::new_of_kind(config, eval_episodes, config.net.kind)
+    }
+
+    /// [`Self::new`] with networks of `kind`.
+    pub fn new_of_kind(config: &Config, eval_episodes: usize, kind: NetworkKind) -> anyhow::Result<Self> {
         config.ppo.validate()?;
-        let agent = Agent::new(dims_probe(&config.env)?, config, config.seed)?;
+        let agent = Agent::new_of_kind(dims_probe(&config.env)?, config, config.seed, kind)?;
         Ok(Self {
             config: config.clone(),
             env: config.env.clone(),
             latency_steps: 0,
             eval_episodes,
+            kind,
+            hooks: Box::new(NoHooks),
             agent: Some(agent),
             training: None,
             states: BTreeMap::new(),
@@ -108,9 +125,18 @@ impl PpoTaskLearner {
         let policy = checkpoint::load_policy(dir)?;
         let info: PolicyInfo = serde_json::from_value(policy.config)
             .with_context(|| format!("{}: the manifest's config is not a quadcl training config", dir.display()))?;
-        let mut learner = Self::new(&info.config, eval_episodes)?;
+        // The policy's own kind of network (a baseline's run is dense whatever its [net] says).
+        let dense = policy.networks.iter().any(|n| n.as_dense().is_some());
+        let kind = if dense { NetworkKind::Dense } else { NetworkKind::Masked };
+        let mut learner = Self::new_of_kind(&info.config, eval_episodes, kind)?;
         let tasks = learner.load(dir)?;
         Ok((learner, tasks))
+    }
+
+    /// The learner with a method's update hooks (before any task or load).
+    pub fn with_hooks(mut self, hooks: Box<dyn UpdateHooks>) -> Self {
+        self.hooks = hooks;
+        self
     }
 
     /// Trains and evaluates from now on in the shifted environment (METHOD.md 2.7).
@@ -126,7 +152,10 @@ impl PpoTaskLearner {
 
     /// The mask settings the networks currently use.
     pub fn mask_config(&self) -> MaskConfig {
-        self.agent_ref().actor.mask_config().clone()
+        match self.agent_ref().actor.as_masked() {
+            Some(net) => net.mask_config().clone(),
+            None => self.config.net.mask.clone(),
+        }
     }
 
     fn make_env(&self, task: &Perturbation, num_envs: usize, seed: u64) -> anyhow::Result<Box<dyn TrainEnv + Send>> {
@@ -188,6 +217,7 @@ impl Learner for PpoTaskLearner {
         let mut ppo = self.config.ppo.clone();
         ppo.iterations = start.iterations;
         let learner = PpoLearner::new(ppo, agent, self.config.ppo.num_envs, start.seed)?;
+        self.hooks.on_task_start(start.task, &learner.agent.params())?;
         self.training = Some((learner, env, start.task));
         self.iterations_done = 0;
         self.clock = TrainingClock::new(0, 0.0);
@@ -200,7 +230,7 @@ impl Learner for PpoTaskLearner {
         // its best is the same number.
         let max_step_reward = max_reward_rate(&self.env) * f64::from(self.env.policy_dt());
         let (learner, env, _) = self.training.as_mut().context("train_iteration without begin_task")?;
-        let mut m = learner.train_iteration(env.as_mut())?;
+        let mut m = learner.train_iteration_with(env.as_mut(), self.hooks.as_mut())?;
         if let Some(r) = m.get("charts/mean_step_reward").copied() {
             m.insert(metric_names::PERFORMANCE.into(), r / max_step_reward);
         }
@@ -211,7 +241,7 @@ impl Learner for PpoTaskLearner {
 
     fn end_task(&mut self) -> anyhow::Result<()> {
         let (mut learner, _, task) = self.training.take().context("end_task without begin_task")?;
-        learner.end_task()?;
+        learner.end_task_with(self.hooks.as_mut())?;
         self.states.insert(task, Self::capture(&learner.agent)?);
         self.last_task = Some(task);
         self.agent = Some(learner.agent);
@@ -244,11 +274,11 @@ impl Learner for PpoTaskLearner {
     }
 
     fn mask_views(&self, task: TaskId) -> Vec<LayerView> {
-        mask_views(&self.agent_ref().networks(), task)
+        mask_views(&self.agent_ref().masked_networks(), task)
     }
 
     fn transfer_lift(&self, related: &[TaskId]) -> Vec<LayerLift> {
-        transfer_lift(&self.agent_ref().networks(), related)
+        transfer_lift(&self.agent_ref().masked_networks(), related)
     }
 
     fn save(&self, dir: &Path, tasks: &[String]) -> anyhow::Result<()> {
@@ -263,8 +293,11 @@ impl Learner for PpoTaskLearner {
         if let Some(t) = self.last_task {
             extras.insert(LAST_TASK_KEY.into(), Tensor::new(&[t as f32], &Device::Cpu)?);
         }
+        for (k, v) in self.hooks.state()? {
+            extras.insert(format!("{METHOD_PREFIX}{k}"), v);
+        }
         let info = PolicyInfo { config: self.config.clone(), dims: agent.dims, iterations: self.iterations_done };
-        checkpoint::save_policy(dir, tasks, &agent.networks(), &extras, &serde_json::to_value(info)?)
+        checkpoint::save_policy(dir, tasks, &agent.saved_networks(), &extras, &serde_json::to_value(info)?)
     }
 
     fn load(&mut self, dir: &Path) -> anyhow::Result<Vec<String>> {
@@ -297,19 +330,22 @@ impl Learner for PpoTaskLearner {
             "{}: the policy was built for other observation/action widths",
             dir.display()
         );
-        let mut networks = policy.networks;
-        let mut take = |name: &str| -> anyhow::Result<MaskedMlp> {
-            let i = networks
-                .iter()
-                .position(|n| n.name() == name)
-                .with_context(|| format!("{}: no network {name}", dir.display()))?;
-            Ok(networks.swap_remove(i))
-        };
+        let mut policy = policy;
         let fresh_sizes: Vec<Vec<usize>> = agent.networks().iter().map(|n| n.sizes().to_vec()).collect();
-        agent.actor = take("actor")?;
-        agent.critic = take("critic")?;
-        agent.encoder = take("cenet_encoder")?;
-        agent.decoder = take("cenet_decoder")?;
+        agent.actor = policy.take_network("actor", dir)?;
+        agent.critic = policy.take_network("critic", dir)?;
+        agent.encoder = policy.take_network("cenet_encoder", dir)?;
+        agent.decoder = policy.take_network("cenet_decoder", dir)?;
+        // A dense method starts from a masked base policy as its dense equivalent; a masked
+        // method cannot continue a dense run (the masks are gone).
+        match (self.kind, agent.network_kind()) {
+            (NetworkKind::Dense, NetworkKind::Masked) => agent = agent.into_dense()?,
+            (NetworkKind::Masked, NetworkKind::Dense) => anyhow::bail!(
+                "{}: the policy's networks are dense (a baseline's); a masked method cannot continue from it",
+                dir.display()
+            ),
+            _ => {}
+        }
         for (net, sizes) in agent.networks().iter().zip(&fresh_sizes) {
             anyhow::ensure!(
                 net.sizes() == sizes.as_slice(),
@@ -324,11 +360,19 @@ impl Learner for PpoTaskLearner {
             agent.task = last_task.unwrap_or(0);
             agent.recall = true;
         }
+        self.hooks
+            .load_state(&method_state(&policy.extras))
+            .with_context(|| format!("{}: the method's state", dir.display()))?;
         self.agent = Some(agent);
         self.states = states;
         self.last_task = last_task;
         Ok(policy.tasks)
     }
+}
+
+/// The method's state among a checkpoint's extras, its prefix taken off.
+pub fn method_state(extras: &BTreeMap<String, Tensor>) -> BTreeMap<String, Tensor> {
+    extras.iter().filter_map(|(k, v)| Some((k.strip_prefix(METHOD_PREFIX)?.to_string(), v.clone()))).collect()
 }
 
 fn put_normalizer(prefix: &str, n: &RunningNormalizer, out: &mut BTreeMap<String, Tensor>) -> anyhow::Result<()> {

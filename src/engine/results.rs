@@ -66,6 +66,9 @@ impl TaskCurve {
 pub struct SessionResults {
     /// The method's name.
     pub method: String,
+    /// The method's settings (`[method.NAME]`), null for a method without any.
+    #[serde(default, skip_serializing_if = "serde_json::Value::is_null")]
+    pub method_settings: serde_json::Value,
     /// Distinct task names (the learner's task ids, the matrix's columns).
     pub tasks: Vec<String>,
     /// The completed training steps.

@@ -8,9 +8,11 @@
 //! seed = 1
 //! iterations = 300            # default budget per task
 //! [method]
-//! name = "ours"
+//! name = "ours"               # or finetune, ewc, si (`quadcl run --method` overrides it)
 //! reinit = true               # switches of cl::ours; unset ones follow [net.mask]
 //! lambda = "0.25"
+//! [method.ewc]                # each method's settings in its own table
+//! lambda = 1e4
 //! [eval]
 //! episodes = 16
 //! [[task]]
@@ -20,7 +22,7 @@
 //! Every key is optional except the tasks; an unknown key is an error naming
 //! the file and the key.
 
-use crate::cl::{KnownBefore, Sequence, SwitchOverrides, Switches};
+use crate::cl::{KnownBefore, MethodSettings, Sequence, SwitchOverrides, Switches};
 use crate::config::Config;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
@@ -73,8 +75,10 @@ pub struct RunSection {
 pub struct RunConfig {
     /// Seed, environment, networks, PPO.
     pub config: Config,
-    /// The method's name (`ours`).
+    /// The method's name (`ours`, `finetune`, `ewc`, `si`).
     pub method: String,
+    /// Every method's settings (`[method.ewc]`, `[method.si]`).
+    pub method_settings: MethodSettings,
     /// The run's switches ([net.mask] with `[method]`'s changes).
     pub switches: Switches,
     pub eval: EvalConfig,
@@ -86,7 +90,12 @@ impl RunConfig {
     /// Reads and checks a run file; errors name the file and the key.
     pub fn load(path: &Path) -> anyhow::Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading run config {}", path.display()))?;
-        let mut cfg = Self::from_toml_str(&text).with_context(|| format!("in run config {}", path.display()))?;
+        Self::load_text(path, &text)
+    }
+
+    /// [`Self::load`] of `text`, read from (or standing for) the file `path`.
+    pub fn load_text(path: &Path, text: &str) -> anyhow::Result<Self> {
+        let mut cfg = Self::from_toml_str(text).with_context(|| format!("in run config {}", path.display()))?;
         // Relative paths inside the file are relative to the file's folder when they exist there.
         let base = path.parent().unwrap_or(Path::new("."));
         for p in [&mut cfg.run.reference, &mut cfg.run.base_policy].into_iter().flatten() {
@@ -118,21 +127,38 @@ impl RunConfig {
         let sequence: Sequence =
             toml::Value::Table(sequence_table).try_into().map_err(|e| anyhow::anyhow!("in [[task]]: {e}"))?;
         sequence.validate()?;
-        let (method, overrides) = match method_value {
-            None => ("ours".to_string(), SwitchOverrides::default()),
+        let (method, overrides, method_settings) = match method_value {
+            None => ("ours".to_string(), SwitchOverrides::default(), MethodSettings::default()),
             Some(toml::Value::Table(mut t)) => {
                 let name = match t.remove("name") {
                     None => "ours".to_string(),
                     Some(toml::Value::String(s)) => s,
                     Some(other) => anyhow::bail!("[method] name = {other}: expected a string"),
                 };
+                let mut settings = toml::Table::new();
+                for key in ["ewc", "si"] {
+                    if let Some(v) = t.remove(key) {
+                        settings.insert(key.into(), v);
+                    }
+                }
+                let settings: MethodSettings = toml::Value::Table(settings)
+                    .try_into()
+                    .map_err(|e| anyhow::anyhow!("in [method.ewc] or [method.si]: {e}"))?;
+                settings.validate()?;
                 let o: SwitchOverrides =
                     toml::Value::Table(t).try_into().map_err(|e| anyhow::anyhow!("in [method]: {e}"))?;
-                (name, o)
+                (name, o, settings)
             }
             Some(other) => anyhow::bail!("method = {other}: expected a [method] table"),
         };
-        crate::cl::method_by_name(&method)?;
+        let kind = crate::cl::method_by_name(&method, &method_settings)?.network_kind();
+        if config.net.kind != kind {
+            anyhow::ensure!(
+                config.net.kind.is_masked(),
+                "[net] kind = \"dense\", but the method {method:?} trains masked networks (in a run file the \
+                 method decides: finetune, ewc and si train dense ones)"
+            );
+        }
         let switches = Switches::from_mask_config(&config.net.mask).with(&overrides);
         switches.apply(&config.net.mask).context("in [method]")?;
         let eval: EvalConfig = match eval_value {
@@ -149,13 +175,55 @@ impl RunConfig {
         if run.base_policy.is_none() {
             sequence.validate_with(KnownBefore::Tasks(Vec::new()))?;
         }
-        Ok(Self { config, method, switches, eval, run, sequence })
+        Ok(Self { config, method, method_settings, switches, eval, run, sequence })
+    }
+
+    /// The run file `text` with `[method] name` set to `name` (`quadcl run --method`): the
+    /// text a run folder keeps as its `run.toml`, so `--resume` compares like with like.
+    /// Comments do not survive; a header says where the file came from.
+    pub fn text_with_method(text: &str, name: &str, source: &Path) -> anyhow::Result<String> {
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| anyhow::anyhow!("{}: {e}", source.display()))?;
+        let method = table.entry("method").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let toml::Value::Table(method) = method else {
+            anyhow::bail!("{}: method = {method}: expected a [method] table", source.display())
+        };
+        method.insert("name".into(), toml::Value::String(name.to_string()));
+        let body = toml::to_string(&table)?;
+        let text = format!("# {} with --method {name}\n{body}", source.display());
+        Self::from_toml_str(&text).with_context(|| format!("{} with --method {name}", source.display()))?;
+        Ok(text)
+    }
+
+    /// The same run with method `name` (`quadcl run --method`); an unknown name is an error.
+    pub fn with_method(mut self, name: &str) -> anyhow::Result<Self> {
+        crate::cl::method_by_name(name, &self.method_settings)?;
+        self.method = name.to_string();
+        Ok(self)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_method_reads_its_own_table_and_bad_values_name_the_key() {
+        let text =
+            "[method]\nname = \"ewc\"\n[method.ewc]\nlambda = 50.0\n[method.si]\nc = 0.5\n[[task]]\nname = \"none\"\n";
+        let r = RunConfig::from_toml_str(text).unwrap();
+        assert_eq!((r.method.as_str(), r.method_settings.ewc.lambda, r.method_settings.si.c), ("ewc", 50.0, 0.5));
+        assert_eq!(r.method_settings.ewc.fisher_samples, crate::cl::EwcConfig::default().fisher_samples);
+        for (table, key) in
+            [("[method.ewc]\nlambda = -1.0", "lambda"), ("[method.si]\nxi = 0.0", "xi"), ("[method.si]\ncc = 1", "cc")]
+        {
+            let text = format!("[method]\nname = \"si\"\n{table}\n[[task]]\nname = \"none\"\n");
+            let err = format!("{:#}", RunConfig::from_toml_str(&text).unwrap_err());
+            assert!(err.contains(key), "{key}: {err}");
+        }
+        let r = RunConfig::from_toml_str(SMALL).unwrap().with_method("si").unwrap();
+        assert_eq!(r.method, "si");
+        assert!(RunConfig::from_toml_str(SMALL).unwrap().with_method("ewx").is_err());
+    }
 
     const SMALL: &str = "seed = 4\niterations = 3\n[method]\nreinit = false\nlambda = \"free\"\n[run]\nlearner = \"toy\"\n[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n[task.switches]\nentropy = false\n";
 
@@ -190,8 +258,8 @@ mod tests {
         assert!(format!("{:#}", RunConfig::from_toml_str("seed = 1\n").unwrap_err()).contains("[[task]]"));
         let err = format!(
             "{:#}",
-            RunConfig::from_toml_str("[method]\nname = \"ewc\"\n[[task]]\nname = \"none\"\n").unwrap_err()
+            RunConfig::from_toml_str("[method]\nname = \"ewx\"\n[[task]]\nname = \"none\"\n").unwrap_err()
         );
-        assert!(err.contains("ewc"), "{err}");
+        assert!(err.contains("ewx") && err.contains("ewc"), "{err}");
     }
 }

@@ -35,6 +35,10 @@ pub const CHOSEN_FILE: &str = "next-step.json";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MetricsFile {
     pub method: String,
+    /// The method's settings (`[method.NAME]`); absent for a method without any (`ours`'
+    /// switches are recorded per step).
+    #[serde(default, skip_serializing_if = "serde_json::Value::is_null")]
+    pub method_settings: serde_json::Value,
     /// Distinct task names (columns of `eval_matrix.rows`).
     pub tasks: Vec<String>,
     pub completed_steps: usize,
@@ -58,6 +62,7 @@ impl MetricsFile {
     pub fn new(results: &SessionResults, total_steps: usize, reference: &dyn Fn(&str) -> Option<Vec<f64>>) -> Self {
         Self {
             method: results.method.clone(),
+            method_settings: results.method_settings.clone(),
             tasks: results.tasks.clone(),
             completed_steps: results.steps.len(),
             total_steps,
@@ -73,6 +78,7 @@ impl MetricsFile {
     pub fn results(&self) -> SessionResults {
         SessionResults {
             method: self.method.clone(),
+            method_settings: self.method_settings.clone(),
             tasks: self.tasks.clone(),
             steps: self.steps.clone(),
             eval_matrix: self.eval_matrix.clone(),

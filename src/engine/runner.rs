@@ -43,7 +43,9 @@ pub fn make_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<St
     let mask = cfg.switches.apply(&cfg.config.net.mask)?;
     match cfg.run.learner {
         LearnerKind::Toy => {
-            let mut learner = ToyLearner::new(&mask, cfg.config.seed)?;
+            let method = crate::cl::method_by_name(&cfg.method, &cfg.method_settings)?;
+            let mut learner = ToyLearner::new_of_kind(&mask, cfg.config.seed, method.network_kind())?
+                .with_hooks(method.update_hooks());
             let learned = match &cfg.run.base_policy {
                 Some(dir) => learner.load(dir).with_context(|| format!("loading the base policy {}", dir.display()))?,
                 None => Vec::new(),
@@ -75,6 +77,17 @@ impl Runner {
     /// Opens the run file `config` into `out` (see [`OpenMode`]). Every check (config,
     /// existing results, checkpoint) happens before anything is written. `echo`: log lines go to stderr too.
     pub fn open(config: &Path, out: &Path, mode: OpenMode, echo: bool) -> anyhow::Result<Self> {
+        Self::open_with_method(config, out, mode, echo, None)
+    }
+
+    /// [`Self::open`] with the run file's method replaced by `method` (`quadcl run --method`).
+    pub fn open_with_method(
+        config: &Path,
+        out: &Path,
+        mode: OpenMode,
+        echo: bool,
+        method: Option<&str>,
+    ) -> anyhow::Result<Self> {
         let dir = RunDir::new(out);
         let resume = match mode {
             OpenMode::New => {
@@ -89,15 +102,22 @@ impl Runner {
             OpenMode::ResumeOrNew => dir.has_run(),
         };
         let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
-        let cfg = RunConfig::load(config)?;
+        let text = match method {
+            Some(name) => RunConfig::text_with_method(&text, name, config)?,
+            None => text,
+        };
+        let cfg = RunConfig::load_text(config, &text)?;
         let previous = if resume {
             let stored = RunConfig::load(&out.join(RUN_FILE))
                 .with_context(|| format!("--resume: {} holds no readable run", out.display()))?;
             anyhow::ensure!(
                 stored == cfg,
-                "--resume: {} differs from the run in {} (its {RUN_FILE}); start a new --out instead",
+                "--resume: {} differs from the run in {} (its {RUN_FILE}: method {:?}, this one {:?}); \
+                 start a new --out instead",
                 config.display(),
-                out.display()
+                out.display(),
+                stored.method,
+                cfg.method
             );
             Some(MetricsFile::load(&dir.metrics_path())?)
         } else {
@@ -137,7 +157,12 @@ impl Runner {
         let prior_cfg = RunConfig::load(&prior.join(RUN_FILE))?;
         for (what, same) in [
             ("seed, [env], [net] or [ppo]", cfg.config == prior_cfg.config),
-            ("[method]", cfg.method == prior_cfg.method && cfg.switches == prior_cfg.switches),
+            (
+                "[method]",
+                cfg.method == prior_cfg.method
+                    && cfg.switches == prior_cfg.switches
+                    && cfg.method_settings == prior_cfg.method_settings,
+            ),
             (
                 "[run] base_policy or learner",
                 cfg.run.base_policy == prior_cfg.run.base_policy && cfg.run.learner == prior_cfg.run.learner,
@@ -175,7 +200,7 @@ impl Runner {
             None => None,
         };
         let (learner, learned) = make_learner(cfg)?;
-        let method = crate::cl::method_by_name(&cfg.method)?;
+        let method = crate::cl::method_by_name(&cfg.method, &cfg.method_settings)?;
         let mut session = Session::new(
             learner,
             method,

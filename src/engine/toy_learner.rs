@@ -3,16 +3,18 @@
 //! the masked Adam. It goes through the same task life cycle, recall and
 //! checkpoints as the PPO agent, in milliseconds, so the session's behaviour
 //! (pause, switches, resume, exact recall) is tested without a simulator.
+//! The network is masked (`ours`) or dense (the baselines, whose update hooks
+//! it calls as the PPO update does: `rl/update_hooks.rs`).
 //!
 //! Shapes: x (batch, 8) -> y (batch, 2); hidden [32] ELU.
 
 use super::learner::{Evaluation, Learner, TaskStart};
 use crate::config::net::{Activation, MaskConfig};
 use crate::nn::{
-    checkpoint, mask_report, mask_views, transfer_lift, AdamConfig, LayerLift, LayerView, MaskReport, MaskedAdam,
-    MaskedMlp, TaskId,
+    checkpoint, mask_report, mask_views, transfer_lift, AdamConfig, DenseMlp, LayerLift, LayerView, MaskReport,
+    MaskedAdam, MaskedMlp, Network, NetworkKind, TaskId,
 };
-use crate::rl::{metric_names, EvalReport, Metrics};
+use crate::rl::{apply_hooks, metric_names, EvalReport, Metrics, NoHooks, OutputSample, UpdateHooks};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use rand::{Rng, SeedableRng};
@@ -26,9 +28,10 @@ const BATCH: usize = 32;
 const EVAL_POINTS: usize = 64;
 
 /// The toy regression learner.
-#[derive(Debug)]
 pub struct ToyLearner {
-    net: MaskedMlp,
+    net: Network,
+    /// The method inside the update.
+    hooks: Box<dyn UpdateHooks>,
     optimizer: MaskedAdam,
     rng: ChaCha8Rng,
     /// (task id, its target matrix (OUT, IN) row-major) of the task in progress.
@@ -57,8 +60,19 @@ fn targets(a: &[f32], x: &[f32]) -> Vec<f32> {
 impl ToyLearner {
     /// A fresh network with `mask` settings, initialised from `seed`.
     pub fn new(mask: &MaskConfig, seed: u64) -> anyhow::Result<Self> {
+        Self::new_of_kind(mask, seed, NetworkKind::Masked)
+    }
+
+    /// [`Self::new`] with a network of `kind` (dense: a shared trunk, one head per task).
+    pub fn new_of_kind(mask: &MaskConfig, seed: u64, kind: NetworkKind) -> anyhow::Result<Self> {
+        let sizes = [IN, 32, OUT];
+        let net = match kind {
+            NetworkKind::Masked => MaskedMlp::new("toy", &sizes, Activation::Elu, mask, seed)?.into(),
+            NetworkKind::Dense => DenseMlp::new("toy", &sizes, Activation::Elu, seed)?.into(),
+        };
         Ok(Self {
-            net: MaskedMlp::new("toy", &[IN, 32, OUT], Activation::Elu, mask, seed)?,
+            net,
+            hooks: Box::new(NoHooks),
             optimizer: MaskedAdam::new(AdamConfig { learning_rate: 1e-2, ..AdamConfig::default() }),
             rng: ChaCha8Rng::seed_from_u64(seed),
             current: None,
@@ -66,8 +80,14 @@ impl ToyLearner {
         })
     }
 
+    /// The learner with a method's update hooks (before any task or load).
+    pub fn with_hooks(mut self, hooks: Box<dyn UpdateHooks>) -> Self {
+        self.hooks = hooks;
+        self
+    }
+
     /// The network (for tests that inspect masks or weights).
-    pub fn network(&self) -> &MaskedMlp {
+    pub fn network(&self) -> &Network {
         &self.net
     }
 }
@@ -76,6 +96,7 @@ impl Learner for ToyLearner {
     fn begin_task(&mut self, start: &TaskStart) -> anyhow::Result<()> {
         self.net.set_mask_config(&start.mask)?;
         self.net.begin_task(start.task, &start.related)?;
+        self.hooks.on_task_start(start.task, &self.net.params())?;
         self.optimizer = MaskedAdam::new(AdamConfig { learning_rate: 1e-2, ..AdamConfig::default() });
         self.rng = ChaCha8Rng::seed_from_u64(start.seed);
         self.current = Some((start.task, target_matrix(&start.name)));
@@ -94,11 +115,12 @@ impl Learner for ToyLearner {
         let mse = self.net.forward(&xt)?.sub(&yt)?.sqr()?.mean_all()?;
         let loss = mse.add(&self.net.soft_score_loss()?)?;
         let params = self.net.params();
-        let grads = loss.backward()?;
+        let mut grads = loss.backward()?;
+        let mut m = apply_hooks(self.hooks.as_mut(), &params, &mut grads)?;
         self.optimizer.step(&params, &grads)?;
+        self.hooks.after_step(&params)?;
         self.iteration += 1;
         let mse = f64::from(mse.to_scalar::<f32>()?);
-        let mut m = Metrics::new();
         m.insert("losses/mse".into(), mse);
         m.insert(metric_names::PERFORMANCE.into(), 1.0 / (1.0 + mse));
         m.insert(metric_names::EPISODIC_RETURN.into(), -mse);
@@ -106,7 +128,9 @@ impl Learner for ToyLearner {
     }
 
     fn end_task(&mut self) -> anyhow::Result<()> {
-        self.current.take().context("end_task without begin_task")?;
+        let (task, _) = self.current.take().context("end_task without begin_task")?;
+        let sample = ToySample { net: &self.net, x: inputs(&mut ChaCha8Rng::seed_from_u64(task as u64), EVAL_POINTS) };
+        self.hooks.on_task_end(task, &self.net.params(), &sample)?;
         self.net.end_task(&mut self.rng)
     }
 
@@ -142,16 +166,22 @@ impl Learner for ToyLearner {
     }
 
     fn mask_views(&self, task: TaskId) -> Vec<LayerView> {
-        mask_views(&[&self.net], task)
+        mask_views(&self.net.as_masked().into_iter().collect::<Vec<_>>(), task)
     }
 
     fn transfer_lift(&self, related: &[TaskId]) -> Vec<LayerLift> {
-        transfer_lift(&[&self.net], related)
+        transfer_lift(&self.net.as_masked().into_iter().collect::<Vec<_>>(), related)
     }
 
     fn save(&self, dir: &Path, tasks: &[String]) -> anyhow::Result<()> {
         anyhow::ensure!(self.current.is_none(), "the toy learner saves between tasks only");
-        checkpoint::save_policy(dir, tasks, &[&self.net], &BTreeMap::new(), &serde_json::json!({"learner": "toy"}))
+        let extras: BTreeMap<String, Tensor> = self
+            .hooks
+            .state()?
+            .into_iter()
+            .map(|(k, v)| (format!("{}{k}", super::ppo_learner::METHOD_PREFIX), v))
+            .collect();
+        checkpoint::save_policy(dir, tasks, &[&self.net], &extras, &serde_json::json!({"learner": "toy"}))
     }
 
     fn load(&mut self, dir: &Path) -> anyhow::Result<Vec<String>> {
@@ -161,7 +191,17 @@ impl Learner for ToyLearner {
             "{}: not a toy-learner checkpoint",
             dir.display()
         );
-        let net = policy.networks.pop().with_context(|| format!("{}: no network", dir.display()))?;
+        let mut net = policy.networks.pop().with_context(|| format!("{}: no network", dir.display()))?;
+        if self.net.kind() == NetworkKind::Dense {
+            net = net.into_dense()?; // a masked base policy starts a dense method as its dense equivalent
+        }
+        anyhow::ensure!(
+            net.kind() == self.net.kind(),
+            "{}: the network is {:?}, this run's method trains a {:?} one",
+            dir.display(),
+            net.kind(),
+            self.net.kind()
+        );
         anyhow::ensure!(
             net.sizes() == self.net.sizes(),
             "{}: network sizes {:?}, expected {:?}",
@@ -169,8 +209,31 @@ impl Learner for ToyLearner {
             net.sizes(),
             self.net.sizes()
         );
+        self.hooks
+            .load_state(&super::ppo_learner::method_state(&policy.extras))
+            .with_context(|| format!("{}: the method's state", dir.display()))?;
         self.net = net;
         self.current = None;
         Ok(policy.tasks)
+    }
+}
+
+/// Points of the task's input distribution through the network in training (sigma 1): the
+/// sample a method probes the toy task's outputs with.
+struct ToySample<'a> {
+    net: &'a Network,
+    /// (EVAL_POINTS, IN) row-major.
+    x: Vec<f32>,
+}
+
+impl OutputSample for ToySample<'_> {
+    fn len(&self) -> usize {
+        self.x.len() / IN
+    }
+
+    fn scaled_output(&self, i: usize) -> anyhow::Result<Tensor> {
+        anyhow::ensure!(i < self.len(), "sample {i} of {}", self.len());
+        let x = Tensor::from_slice(&self.x[i * IN..(i + 1) * IN], (1, IN), &Device::Cpu)?;
+        Ok(self.net.forward(&x)?.squeeze(0)?)
     }
 }

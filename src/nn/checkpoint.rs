@@ -15,6 +15,9 @@
 //!   sha256 of the rest of the manifest (`manifest_digest`), so an edited
 //!   manifest is refused.
 //!
+//! Dense networks (the baselines' shared trunk and per-task heads) are
+//! described in `checkpoint/dense.rs`.
+//!
 //! Every write is atomic; loading checks version, hashes, dtypes and shapes,
 //! and reports a corrupt or mismatched file as an error naming it.
 
@@ -22,6 +25,7 @@ use super::bitmask::BitMask;
 use super::manifest_digest::{check as check_manifest_digest, manifest_digest, metadata as digest_metadata};
 use super::masked::{var_values, MaskedLinear, Training};
 use super::mlp::MaskedMlp;
+use super::network::{AsNetworkRef, Network, NetworkRef};
 use super::state::{ElementState, TaskId};
 use crate::config::net::{Activation, MaskConfig};
 use crate::util::{sha256_hex, write_atomic};
@@ -31,6 +35,8 @@ use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
+
+mod dense;
 
 /// Bumped whenever the layout of a policy directory changes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -43,7 +49,8 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 pub struct Policy {
     /// Task names; a [`TaskId`] indexes this list.
     pub tasks: Vec<String>,
-    pub networks: Vec<MaskedMlp>,
+    /// The masked networks, then the dense ones.
+    pub networks: Vec<Network>,
     /// Named f32 tensors (per-task action std, normaliser statistics, ...).
     pub extras: BTreeMap<String, Tensor>,
     /// The run's configuration, as given to [`save_policy`].
@@ -51,9 +58,24 @@ pub struct Policy {
 }
 
 impl Policy {
-    /// The network called `name`.
+    /// The masked network called `name`.
     pub fn network(&self, name: &str) -> anyhow::Result<&MaskedMlp> {
-        self.networks.iter().find(|n| n.name() == name).with_context(|| format!("policy has no network {name:?}"))
+        let net = self
+            .networks
+            .iter()
+            .find(|n| n.name() == name)
+            .with_context(|| format!("policy has no network {name:?}"))?;
+        net.as_masked().with_context(|| format!("network {name:?} is dense, not masked"))
+    }
+
+    /// Takes the network called `name` out of the policy; `dir` names the directory in the error.
+    pub fn take_network(&mut self, name: &str, dir: &Path) -> anyhow::Result<Network> {
+        let i = self
+            .networks
+            .iter()
+            .position(|n| n.name() == name)
+            .with_context(|| format!("{}: no network {name}", dir.display()))?;
+        Ok(self.networks.remove(i))
     }
 }
 
@@ -62,6 +84,8 @@ struct Manifest {
     format_version: u32,
     tasks: Vec<String>,
     networks: Vec<NetworkEntry>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    dense_networks: Vec<dense::DenseEntry>,
     extras: Vec<String>,
     config: serde_json::Value,
     files: BTreeMap<String, String>,
@@ -119,22 +143,35 @@ fn serialize(
 pub fn save_policy(
     dir: &Path,
     tasks: &[String],
-    networks: &[&MaskedMlp],
+    networks: &[&dyn AsNetworkRef],
     extras: &BTreeMap<String, Tensor>,
     config: &serde_json::Value,
 ) -> anyhow::Result<()> {
+    let networks: Vec<NetworkRef> = networks.iter().map(|n| n.as_network_ref()).collect();
+    let name = |n: &NetworkRef| match n {
+        NetworkRef::Masked(n) => n.name().to_string(),
+        NetworkRef::Dense(n) => n.name().to_string(),
+    };
     for (i, a) in networks.iter().enumerate() {
         ensure!(
-            networks[..i].iter().all(|b| b.name() != a.name()),
+            networks[..i].iter().all(|b| name(b) != name(a)),
             "{}: two networks are called {:?}",
             dir.display(),
-            a.name()
+            name(a)
         );
     }
     let mut model = BTreeMap::new();
     let mut masks = BTreeMap::new();
     let mut entries = Vec::new();
+    let mut dense_entries = Vec::new();
     for net in networks {
+        let net = match net {
+            NetworkRef::Masked(net) => net,
+            NetworkRef::Dense(net) => {
+                dense_entries.push(dense::put_dense(net, tasks, &mut model)?);
+                continue;
+            }
+        };
         let mut layers = Vec::new();
         for l in net.layers() {
             let n = &l.name;
@@ -191,6 +228,7 @@ pub fn save_policy(
         format_version: FORMAT_VERSION,
         tasks: tasks.to_vec(),
         networks: entries,
+        dense_networks: dense_entries,
         extras: extras.keys().cloned().collect(),
         config: config.clone(),
         files: BTreeMap::new(),
@@ -429,13 +467,22 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 training,
             });
         }
-        networks.push(MaskedMlp {
+        networks.push(Network::Masked(MaskedMlp {
             name: e.name.clone(),
             sizes: e.sizes.clone(),
             activation: e.activation,
             cfg: e.mask.clone(),
             layers,
-        });
+        }));
+    }
+    for e in &manifest.dense_networks {
+        ensure!(
+            networks.iter().all(|n| n.name() != e.name),
+            "{}: two networks are called {:?}",
+            manifest_path.display(),
+            e.name
+        );
+        networks.push(Network::Dense(dense::read_dense(e, &model, n_tasks, &manifest_path.display().to_string())?));
     }
     let mut extras = BTreeMap::new();
     for name in &manifest.extras {

@@ -24,6 +24,23 @@ pub struct FrozenWeights {
     theta: Tensor,
 }
 
+impl FrozenWeights {
+    /// The detached theta of `network`.
+    pub(crate) fn new(network: &str, theta: Tensor) -> Self {
+        Self { network: network.to_string(), theta }
+    }
+
+    /// The network these weights belong to.
+    pub(crate) fn network(&self) -> &str {
+        &self.network
+    }
+
+    /// The fused op's theta.
+    pub(crate) fn theta(&self) -> &Tensor {
+        &self.theta
+    }
+}
+
 /// A multi-layer perceptron of masked layers sharing one task life cycle.
 #[derive(Debug)]
 pub struct MaskedMlp {

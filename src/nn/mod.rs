@@ -5,6 +5,8 @@
 //! - `select`: the selection rules as pure functions;
 //! - `masked`: [`MaskedLinear`], where the algorithm lives;
 //! - `mlp`: [`MaskedMlp`] (actor, critic, CENet);
+//! - `dense`: [`DenseMlp`], a shared dense trunk with one head per task (the non-mask baselines);
+//! - `network`: [`Network`], either of the two, as the agent and checkpoints hold them;
 //! - `fused`: the whole MLP as one candle custom op (the speed path: gemm on slices, one backward pass);
 //! - `activation`: a fused ELU as candle custom ops (layer-by-layer reference path);
 //! - `optim`: [`MaskedAdam`], which never moves a frozen element;
@@ -15,24 +17,28 @@
 mod activation;
 mod bitmask;
 pub mod checkpoint;
+mod dense;
 mod element_view;
 mod fused;
 mod manifest_digest;
 mod masked;
 mod masked_weight;
 mod mlp;
+mod network;
 mod optim;
 mod select;
 mod state;
 mod stats;
 
-pub use crate::config::net::{Activation, MaskConfig, SelectionRule};
+pub use crate::config::net::{Activation, MaskConfig, NetworkKind, SelectionRule};
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};
+pub use dense::{DenseLayer, DenseMlp};
 pub use element_view::{mask_views, transfer_lift, ElementView, LayerLift, LayerView};
 pub use fused::{fused_mlp, matmul};
 pub use masked::MaskedLinear;
 pub use mlp::{FrozenWeights, MaskedMlp};
+pub use network::{AsNetworkRef, IterationNoise, Network, NetworkRef};
 pub use optim::{AdamConfig, MaskedAdam};
 pub use select::row_quota;
 pub use state::{ElementState, IllegalTransition, TaskId};

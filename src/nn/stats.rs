@@ -1,8 +1,11 @@
 //! Mask statistics (printed by `quadcl masks`): per network, per layer, per
 //! task, which parameters are used. The JSON shape is documented on [`MaskReport`].
+//! A dense network (the baselines) reports its trunk layers as wholly shared by
+//! every task and its heads as one layer `{net}.head` private to each task.
 
+use super::dense::DenseMlp;
 use super::masked::MaskedLinear;
-use super::mlp::MaskedMlp;
+use super::network::Network;
 use super::state::ElementState;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -91,17 +94,58 @@ fn layer_masks(l: &MaskedLinear, tasks: &[String]) -> LayerMasks {
 }
 
 /// The statistics of every network; `tasks` names the task ids.
-pub fn mask_report(tasks: &[String], networks: &[&MaskedMlp]) -> MaskReport {
+pub fn mask_report(tasks: &[String], networks: &[&Network]) -> MaskReport {
     MaskReport {
         tasks: tasks.to_vec(),
         networks: networks
             .iter()
             .map(|n| NetworkMasks {
                 name: n.name().to_string(),
-                layers: n.layers().iter().map(|l| layer_masks(l, tasks)).collect(),
+                layers: match n {
+                    Network::Masked(n) => n.layers().iter().map(|l| layer_masks(l, tasks)).collect(),
+                    Network::Dense(n) => dense_layer_masks(n, tasks),
+                },
             })
             .collect(),
     }
+}
+
+/// A dense network's trunk layers (every element used by every task with a head, the first
+/// to finish counting them as fresh) and its heads (one layer, each task's head private to it).
+fn dense_layer_masks(net: &DenseMlp, tasks: &[String]) -> Vec<LayerMasks> {
+    let ids: Vec<usize> = net.heads.keys().copied().collect();
+    let first = net.finished_tasks().first().copied().or(ids.first().copied());
+    let layer = |name: String, out_dim: usize, in_dim: usize, head: bool| {
+        let n = out_dim * in_dim;
+        let per_task = ids
+            .iter()
+            .map(|&t| {
+                let fresh = head || Some(t) == first;
+                TaskMask {
+                    task: task_name(tasks, t),
+                    selected: n,
+                    fraction: 1.0,
+                    from_vacant: if fresh { n } else { 0 },
+                    from_occupied: if fresh { 0 } else { n },
+                }
+            })
+            .collect();
+        let overlap = ids.iter().map(|a| ids.iter().map(|b| if head && a != b { 0 } else { n }).collect()).collect();
+        LayerMasks {
+            name,
+            shape: [out_dim, in_dim],
+            vacant: 0,
+            occupied: if head { 0 } else { n },
+            private: if head { ids.iter().map(|&t| (task_name(tasks, t), n)).collect() } else { BTreeMap::new() },
+            per_task,
+            overlap,
+        }
+    };
+    let s = net.sizes();
+    let last = s.len() - 2;
+    let mut out: Vec<_> = (0..last).map(|i| layer(format!("{}.l{i}", net.name()), s[i + 1], s[i], false)).collect();
+    out.push(layer(format!("{}.head", net.name()), s[last + 1], s[last], true));
+    out
 }
 
 impl MaskReport {

@@ -7,10 +7,13 @@
 //! - critic:  privileged obs (B, priv) -> value (B, 1)
 //! - `log_std` (act,): the Gaussian policy's state-independent log-std (per task).
 //!
-//! All four networks are `nn::MaskedMlp`s (METHOD 2): while a task trains
-//! they run with the current task's sampled masks ([`Agent::begin_iteration`]);
-//! after [`Agent::end_task`] (or when loaded from a policy directory) they
-//! recall the task's frozen masks and biases, bit-identically.
+//! The four networks are `nn::Network`s of one kind. Masked (`ours`, METHOD 2):
+//! while a task trains they run with the current task's sampled masks
+//! ([`Agent::begin_iteration`]); after [`Agent::end_task`] (or when loaded from a
+//! policy directory) they recall the task's frozen masks and biases,
+//! bit-identically. Dense (the regularisation and rehearsal baselines, METHOD 3):
+//! a shared trunk and one output head per task ([`Agent::into_dense`] turns a
+//! masked base policy into one).
 //!
 //! The actor's CENet inputs are detached: the CENet learns only from its own
 //! beta-VAE loss (DreamWaQ), the actor treats its estimate as an input.
@@ -22,7 +25,7 @@ use super::cenet_loss::{split_encoder_output, CenetEstimate};
 use super::env::EnvDims;
 use super::normalizer::RunningNormalizer;
 use crate::config::Config;
-use crate::nn::{MaskedMlp, Param, TaskId};
+use crate::nn::{DenseMlp, MaskedMlp, Network, NetworkKind, Param, TaskId};
 use candle_core::{Device, Tensor, Var};
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -35,10 +38,10 @@ pub struct Agent {
     /// Latent width L of the CENet (0 when the CENet is off).
     pub(crate) latent_dim: usize,
     pub(crate) use_cenet: bool,
-    pub(crate) actor: MaskedMlp,
-    pub(crate) critic: MaskedMlp,
-    pub(crate) encoder: MaskedMlp,
-    pub(crate) decoder: MaskedMlp,
+    pub(crate) actor: Network,
+    pub(crate) critic: Network,
+    pub(crate) encoder: Network,
+    pub(crate) decoder: Network,
     /// The task being trained, or recalled.
     pub(crate) task: TaskId,
     /// Recall mode: forward with the task's frozen masks (after `end_task`, or loaded).
@@ -81,7 +84,7 @@ impl Agent {
     }
 
     /// The actor network.
-    pub fn actor(&self) -> &MaskedMlp {
+    pub fn actor(&self) -> &Network {
         &self.actor
     }
 
@@ -90,48 +93,46 @@ impl Agent {
         &self.obs_normalizer
     }
 
-    /// Fresh networks for an environment with `dims`; `seed` seeds every
+    /// Fresh networks (of `config.net.kind`) for an environment with `dims`; `seed` seeds every
     /// initialiser. Sizes: `config.net` (actor, critic, CENet encoder),
     /// `config.ppo.cenet_decoder_hidden` (decoder, with the encoder's activation).
     pub fn new(dims: EnvDims, config: &Config, seed: u64) -> anyhow::Result<Self> {
+        Self::new_of_kind(dims, config, seed, config.net.kind)
+    }
+
+    /// [`Self::new`] with networks of `kind` (dense: [`DenseMlp`]'s initialiser, same sizes and seeds).
+    pub fn new_of_kind(dims: EnvDims, config: &Config, seed: u64, kind: NetworkKind) -> anyhow::Result<Self> {
         let (cfg, net) = (&config.ppo, &config.net);
         let latent_dim = if cfg.use_cenet { cfg.cenet_latent_dim } else { 0 };
         let context = if cfg.use_cenet { 3 + latent_dim } else { 0 };
-        let sizes = |input: usize, hidden: &[usize], output: usize| {
-            let mut s = vec![input];
-            s.extend_from_slice(hidden);
-            s.push(output);
-            s
+        let build = |name: &str, input: usize, hidden: &[usize], output: usize, activation, seed| {
+            let mut sizes = vec![input];
+            sizes.extend_from_slice(hidden);
+            sizes.push(output);
+            Ok::<Network, anyhow::Error>(match kind {
+                NetworkKind::Masked => MaskedMlp::new(name, &sizes, activation, &net.mask, seed)?.into(),
+                NetworkKind::Dense => DenseMlp::new(name, &sizes, activation, seed)?.into(),
+            })
         };
-        let mask = &net.mask;
-        let mut actor = MaskedMlp::new(
-            "actor",
-            &sizes(dims.obs + context, &net.actor.hidden, dims.act),
-            net.actor.activation,
-            mask,
-            seed,
-        )?;
+        let mut actor = build("actor", dims.obs + context, &net.actor.hidden, dims.act, net.actor.activation, seed)?;
         actor.scale_output_init(cfg.actor_output_init_scale as f32)?;
-        let critic = MaskedMlp::new(
-            "critic",
-            &sizes(dims.privileged_obs, &net.critic.hidden, 1),
-            net.critic.activation,
-            mask,
-            seed.wrapping_add(1),
-        )?;
+        let critic =
+            build("critic", dims.privileged_obs, &net.critic.hidden, 1, net.critic.activation, seed.wrapping_add(1))?;
         let history = dims.history_len * dims.obs;
-        let encoder = MaskedMlp::new(
+        let encoder = build(
             "cenet_encoder",
-            &sizes(history, &net.cenet.hidden, 3 + 2 * cfg.cenet_latent_dim),
+            history,
+            &net.cenet.hidden,
+            3 + 2 * cfg.cenet_latent_dim,
             net.cenet.activation,
-            mask,
             seed.wrapping_add(2),
         )?;
-        let decoder = MaskedMlp::new(
+        let decoder = build(
             "cenet_decoder",
-            &sizes(3 + cfg.cenet_latent_dim, &cfg.cenet_decoder_hidden, dims.obs),
+            3 + cfg.cenet_latent_dim,
+            &cfg.cenet_decoder_hidden,
+            dims.obs,
             net.cenet.activation,
-            mask,
             seed.wrapping_add(3),
         )?;
         let log_std = Var::from_tensor(&Tensor::from_vec(
@@ -158,11 +159,41 @@ impl Agent {
     }
 
     /// The four networks, in checkpoint order.
-    pub fn networks(&self) -> [&MaskedMlp; 4] {
+    pub fn networks(&self) -> [&Network; 4] {
         [&self.actor, &self.critic, &self.encoder, &self.decoder]
     }
 
-    fn networks_mut(&mut self) -> [&mut MaskedMlp; 4] {
+    /// The four networks as a checkpoint writes them.
+    pub fn saved_networks(&self) -> [&dyn crate::nn::AsNetworkRef; 4] {
+        [&self.actor, &self.critic, &self.encoder, &self.decoder]
+    }
+
+    /// The networks that are masked (all four, or none for a dense agent).
+    pub fn masked_networks(&self) -> Vec<&MaskedMlp> {
+        self.networks().into_iter().filter_map(Network::as_masked).collect()
+    }
+
+    /// Which kind of networks the agent has.
+    pub fn network_kind(&self) -> NetworkKind {
+        self.actor.kind()
+    }
+
+    /// The same agent with dense networks ([`Network::into_dense`]: a masked policy's last
+    /// finished task becomes the shared trunk, every finished task keeps its output layer as
+    /// its head); only between tasks.
+    pub fn into_dense(mut self) -> anyhow::Result<Self> {
+        anyhow::ensure!(
+            self.networks().iter().all(|n| n.current_task().is_none()),
+            "an agent becomes dense between tasks only"
+        );
+        self.actor = self.actor.into_dense()?;
+        self.critic = self.critic.into_dense()?;
+        self.encoder = self.encoder.into_dense()?;
+        self.decoder = self.decoder.into_dense()?;
+        Ok(self)
+    }
+
+    fn networks_mut(&mut self) -> [&mut Network; 4] {
         [&mut self.actor, &mut self.critic, &mut self.encoder, &mut self.decoder]
     }
 
@@ -195,7 +226,7 @@ impl Agent {
     /// in parallel: the same masks as one network after the other.
     pub fn begin_iteration(&mut self, iteration: usize, rng: &mut impl Rng) -> anyhow::Result<()> {
         let noise = self.networks().map(|net| net.draw_iteration_noise(rng));
-        let nets: Vec<(&mut MaskedMlp, anyhow::Result<_>)> = self.networks_mut().into_iter().zip(noise).collect();
+        let nets: Vec<(&mut Network, anyhow::Result<_>)> = self.networks_mut().into_iter().zip(noise).collect();
         nets.into_par_iter().try_for_each(|(net, noise)| net.begin_iteration_with_noise(iteration, noise?))
     }
 
@@ -220,7 +251,7 @@ impl Agent {
     }
 
     /// Forward through `net`: training masks, or the task's frozen ones in recall mode.
-    fn run(&self, net: &MaskedMlp, x: &Tensor) -> anyhow::Result<Tensor> {
+    fn run(&self, net: &Network, x: &Tensor) -> anyhow::Result<Tensor> {
         if self.recall {
             net.forward_task(self.task, x)
         } else {

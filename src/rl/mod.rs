@@ -6,6 +6,8 @@
 //! | `ppo` | the PPO learner: rollout collection and the update, top to bottom |
 //! | `agent` | actor, critic, CENet encoder/decoder, policy std, observation statistics |
 //! | `rollout` | the rollout buffer of one iteration, GAE with time-out bootstrapping |
+//! | `update_hooks` | [`UpdateHooks`]: how a continual-learning method reaches into the update |
+//! | `rollout_sample` | the last rollout as the sample a method probes the ending task's policy with |
 //! | `normalizer` | running observation statistics, frozen when a task ends |
 //! | `losses` | the PPO loss pieces (Gaussian log-prob/entropy, clipped surrogate, value loss, KL, adaptive lr) |
 //! | `cenet_loss` | the CENet's output split, reparameterisation and beta-VAE loss |
@@ -34,11 +36,13 @@ mod ppo;
 mod progress;
 mod robot_view;
 mod rollout;
+mod rollout_sample;
 mod sim_env;
 #[cfg(test)]
 mod test_tensors;
 mod toy_env;
 mod trainer;
+mod update_hooks;
 
 pub use acting::{ActOutput, ActingWeights};
 pub use agent::Agent;
@@ -57,3 +61,4 @@ pub use robot_view::{RobotFrame, RobotViewer};
 pub use sim_env::SimTrainEnv;
 pub use toy_env::ToyEnv;
 pub use trainer::{load_resume_point, train, train_from, TrainSummary, TrainerState};
+pub use update_hooks::{apply_hooks, NoHooks, OutputSample, UpdateHooks};

@@ -65,7 +65,7 @@ pub fn save_policy(agent: &Agent, tasks: &[String], info: &PolicyInfo, dir: &Pat
     extras.insert(format!("log_std.t{t}"), agent.log_std.as_tensor().copy()?);
     put_normalizer(&format!("obs_normalizer.t{t}"), &agent.obs_normalizer, &mut extras)?;
     put_normalizer(&format!("privileged_normalizer.t{t}"), &agent.privileged_normalizer, &mut extras)?;
-    checkpoint::save_policy(dir, tasks, &agent.networks(), &extras, &serde_json::to_value(info)?)
+    checkpoint::save_policy(dir, tasks, &agent.saved_networks(), &extras, &serde_json::to_value(info)?)
 }
 
 /// Reads a policy directory and returns the agent recalling task `task`
@@ -76,19 +76,12 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
     let policy = checkpoint::load_policy(dir)?;
     let info: PolicyInfo = serde_json::from_value(policy.config.clone())
         .with_context(|| format!("{}: the manifest's config is not a quadcl training config", dir.display()))?;
-    let mut networks = policy.networks;
-    let mut take = |name: &str| -> anyhow::Result<crate::nn::MaskedMlp> {
-        let i = networks
-            .iter()
-            .position(|n| n.name() == name)
-            .with_context(|| format!("{}: no network {name}", dir.display()))?;
-        Ok(networks.swap_remove(i))
-    };
+    let mut policy = policy;
     let mut agent = Agent::new(info.dims, &info.config, info.config.seed)?;
-    agent.actor = take("actor")?;
-    agent.critic = take("critic")?;
-    agent.encoder = take("cenet_encoder")?;
-    agent.decoder = take("cenet_decoder")?;
+    agent.actor = policy.take_network("actor", dir)?;
+    agent.critic = policy.take_network("critic", dir)?;
+    agent.encoder = policy.take_network("cenet_encoder", dir)?;
+    agent.decoder = policy.take_network("cenet_decoder", dir)?;
     // A sequence's checkpoint names every task of the sequence, learned or not.
     let learned = learned_tasks(&agent.actor);
     let task_id: TaskId = match task {
@@ -128,7 +121,7 @@ pub fn load_policy(dir: &Path, task: Option<&str>) -> anyhow::Result<LoadedPolic
 }
 
 /// The tasks a network has learned or is training, in the order they were first trained.
-fn learned_tasks(net: &crate::nn::MaskedMlp) -> Vec<TaskId> {
+fn learned_tasks(net: &crate::nn::Network) -> Vec<TaskId> {
     let mut tasks = net.finished_tasks().to_vec();
     tasks.extend(net.current_task().filter(|t| !tasks.contains(t)));
     tasks

@@ -12,6 +12,10 @@
 //!    its own network's parameters, so actor, critic and CENet go forward and
 //!    backward in parallel and their gradients are merged before the clip.
 //!
+//! A continual-learning method enters through [`UpdateHooks`] (`rl/update_hooks.rs`):
+//! it sees and may change the task gradient, adds its loss' gradient before the
+//! clip, and sees every step and the end of the task.
+//!
 //! Metrics are namespaced as in CleanRL: `charts/*`, `losses/*`, `time/*`.
 
 use super::agent::{matrix, normal_tensor, Agent};
@@ -23,6 +27,8 @@ use super::losses::{
 };
 use super::metrics::{names, Metrics};
 use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, RolloutRow};
+use super::rollout_sample::RolloutSample;
+use super::update_hooks::{apply_hooks, NoHooks, UpdateHooks};
 use crate::config::PpoConfig;
 use crate::nn::{AdamConfig, MaskedAdam};
 use candle_core::backprop::GradStore;
@@ -75,11 +81,27 @@ impl PpoLearner {
 
     /// Ends the agent's task (final masks, frozen statistics), with the learner's random stream.
     pub fn end_task(&mut self) -> anyhow::Result<()> {
+        self.end_task_with(&mut NoHooks)
+    }
+
+    /// [`Self::end_task`], telling `hooks` first (with the last rollout as the task's sample).
+    pub fn end_task_with(&mut self, hooks: &mut dyn UpdateHooks) -> anyhow::Result<()> {
+        let params = self.agent.params();
+        hooks.on_task_end(self.agent.task, &params, &RolloutSample::new(&self.agent, &self.buffer))?;
         self.agent.end_task(&mut self.rng)
     }
 
     /// One training iteration: a rollout, then an update. Returns its metrics.
     pub fn train_iteration(&mut self, env: &mut dyn TrainEnv) -> anyhow::Result<Metrics> {
+        self.train_iteration_with(env, &mut NoHooks)
+    }
+
+    /// [`Self::train_iteration`] with a method's hooks in the update.
+    pub fn train_iteration_with(
+        &mut self,
+        env: &mut dyn TrainEnv,
+        hooks: &mut dyn UpdateHooks,
+    ) -> anyhow::Result<Metrics> {
         let start = Instant::now();
         self.agent.begin_iteration(self.iteration, &mut self.rng)?;
         let mut metrics = self.collect_rollout(env)?;
@@ -91,7 +113,7 @@ impl PpoLearner {
         }
         let rollout_s = start.elapsed().as_secs_f64();
         let update_start = Instant::now();
-        metrics.extend(self.update()?);
+        metrics.extend(self.update_with(hooks)?);
         let update_s = update_start.elapsed().as_secs_f64();
         let total = start.elapsed().as_secs_f64();
         metrics.insert("time/rollout_s".into(), rollout_s);
@@ -201,6 +223,11 @@ impl PpoLearner {
     /// The PPO update over the collected rollout; returns the loss metrics
     /// averaged over minibatches.
     pub fn update(&mut self) -> anyhow::Result<Metrics> {
+        self.update_with(&mut NoHooks)
+    }
+
+    /// [`Self::update`] with a method's hooks around every optimiser step.
+    pub fn update_with(&mut self, hooks: &mut dyn UpdateHooks) -> anyhow::Result<Metrics> {
         let b = &self.buffer;
         let d = b.dims;
         let rollout_log_std =
@@ -298,6 +325,11 @@ impl PpoLearner {
                     add(&mut sums, "losses/cenet_kl", &cenet.kl)?;
                 }
                 add(&mut sums, "losses/soft_score", &soft_score)?;
+                // The method sees the task gradient, then adds its own loss' gradient.
+                let params = agent.params();
+                for (k, v) in apply_hooks(hooks, &params, &mut grads)? {
+                    *sums.entry(k).or_default() += v;
+                }
 
                 // The learning rate adapts to this minibatch's KL before its step (legged_gym).
                 let kl = actor.kl;
@@ -318,10 +350,10 @@ impl PpoLearner {
                 // (beta_H * n on log_sigma, over 10 for a 512x256 layer at beta_H 1e-4)
                 // would otherwise swamp the norm and shrink every PPO gradient; Adam is
                 // per-element scale-free, so log_sigma needs no clipping.
-                let params = agent.params();
                 let clipped: Vec<_> = params.iter().filter(|p| !p.name.ends_with("sigma")).cloned().collect();
                 let grad_norm = optimizer.clip_grad_norm(&clipped, &mut grads, cfg.max_grad_norm)?;
                 optimizer.step(&params, &grads)?;
+                hooks.after_step(&params)?;
 
                 add(&mut sums, "losses/policy_loss", &actor.policy_loss)?;
                 add(&mut sums, "losses/value_loss", &critic_loss)?;

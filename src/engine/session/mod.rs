@@ -104,6 +104,7 @@ impl Session {
         let (sender, commands) = channel();
         let results = SessionResults {
             method: method.name().to_string(),
+            method_settings: method.settings(),
             eval_matrix: EvalMatrix::new(tasks.clone()),
             tasks,
             ..Default::default()

@@ -1,0 +1,171 @@
+//! The baselines' defining behaviour, each on a tiny problem with a
+//! hand-computed answer: EWC's penalty gradient and Fisher, SI's path
+//! integral, and on the toy learner's sequence that finetune forgets, `ours`
+//! does not, and EWC forgets less than finetune; a dense run resumes exactly.
+
+mod engine_common;
+use candle_core::{backprop::GradStore, Device, Tensor, Var};
+use engine_common::assert_metrics_json_complete;
+use quadcl::cl::{diagonal_fisher, EwcConfig, EwcHooks, QuadraticPenalty, SiConfig, SiHooks};
+use quadcl::headless::{run, RunOptions};
+use quadcl::nn::Param;
+use quadcl::rl::{OutputSample, UpdateHooks};
+
+fn param(name: &str, values: &[f32]) -> Param {
+    let var = Var::from_tensor(&Tensor::new(values, &Device::Cpu).unwrap()).unwrap();
+    Param { name: name.into(), var, update_mask: None }
+}
+
+fn grad_of(loss: &Tensor, p: &Param) -> Vec<f32> {
+    loss.backward().unwrap().get(p.var.as_tensor()).unwrap().to_vec1().unwrap()
+}
+
+#[test]
+fn ewc_penalty_gradient_points_back_to_the_anchor_and_scales_with_the_fisher() {
+    let p = param("actor.l0.weight", &[1.0, -2.0, 0.5]);
+    let anchor = Tensor::new(&[0.0f32, 0.0, 0.5], &Device::Cpu).unwrap();
+    let gradient = |fisher: [f32; 3]| {
+        let mut penalty = QuadraticPenalty::default();
+        penalty.accumulate(&p.name, Tensor::new(&fisher, &Device::Cpu).unwrap(), anchor.clone()).unwrap();
+        grad_of(&penalty.loss(std::slice::from_ref(&p), 10.0).unwrap().unwrap(), &p)
+    };
+    let g = gradient([1.0, 1.0, 1.0]);
+    // 2 lambda F (theta - theta*): a descent step moves theta towards the anchor.
+    assert_eq!(g, [20.0, -40.0, 0.0]);
+    let g2 = gradient([2.0, 0.5, 3.0]);
+    assert_eq!(g2, [40.0, -20.0, 0.0]);
+}
+
+/// out = W x for a 2x2 W and stored inputs x_i.
+struct Linear<'a> {
+    w: &'a Param,
+    xs: Vec<[f32; 2]>,
+}
+
+impl OutputSample for Linear<'_> {
+    fn len(&self) -> usize {
+        self.xs.len()
+    }
+
+    fn scaled_output(&self, i: usize) -> anyhow::Result<Tensor> {
+        let x = Tensor::new(&self.xs[i], &Device::Cpu)?.reshape((2, 1))?;
+        Ok(self.w.var.as_tensor().reshape((2, 2))?.matmul(&x)?.squeeze(1)?)
+    }
+}
+
+#[test]
+fn the_fisher_of_a_linear_output_is_the_mean_squared_input_and_skips_heads() {
+    let w = param("actor.l0.weight", &[0.3, -0.2, 0.1, 0.7]);
+    let head = param("actor.head.weight", &[1.0]);
+    let sample = Linear { w: &w, xs: vec![[1.0, 2.0], [3.0, -1.0]] };
+    let fisher = diagonal_fisher(&[w.clone(), head], &sample, 100).unwrap();
+    // d out_k / d W[k][j] = x_j: F[k][j] = mean_i x_ij^2 = [5, 2.5] per row.
+    assert_eq!(fisher["actor.l0.weight"].to_vec1::<f32>().unwrap(), [5.0, 2.5, 5.0, 2.5]);
+    assert!(!fisher.contains_key("actor.head.weight"), "a task's own head is not regularised");
+}
+
+#[test]
+fn si_omega_is_the_path_integral_of_the_task_gradient_on_a_quadratic() {
+    // L = 0.5 sum a_i theta_i^2, plain gradient steps of 0.1.
+    let a = [1.0f32, 4.0];
+    let p = param("toy.l0.weight", &[1.0, -1.0]);
+    let params = [p.clone()];
+    let mut si = SiHooks::new(SiConfig { c: 1.0, xi: 0.1 });
+    si.on_task_start(0, &params).unwrap();
+    let mut theta = [1.0f32, -1.0];
+    let mut omega = [0.0f32; 2];
+    for _ in 0..3 {
+        let coeff = Tensor::new(&a, &Device::Cpu).unwrap();
+        let loss = p.var.as_tensor().sqr().unwrap().mul(&coeff).unwrap().sum_all().unwrap().affine(0.5, 0.0).unwrap();
+        let mut grads: GradStore = loss.backward().unwrap();
+        si.adjust_gradients(&params, &mut grads).unwrap();
+        let g: Vec<f32> = (0..2).map(|i| a[i] * theta[i]).collect();
+        for i in 0..2 {
+            let next = theta[i] - 0.1 * g[i];
+            omega[i] += -g[i] * (next - theta[i]);
+            theta[i] = next;
+        }
+        p.var.set(&Tensor::new(&theta, &Device::Cpu).unwrap()).unwrap();
+        si.after_step(&params).unwrap();
+    }
+    let got: Vec<f32> = si.omega("toy.l0.weight").unwrap().to_vec1().unwrap();
+    for i in 0..2 {
+        assert!((got[i] - omega[i]).abs() < 1e-6, "omega {got:?}, by hand {omega:?}");
+    }
+    struct Empty;
+    impl OutputSample for Empty {
+        fn len(&self) -> usize {
+            0
+        }
+        fn scaled_output(&self, _: usize) -> anyhow::Result<Tensor> {
+            unreachable!()
+        }
+    }
+    si.on_task_end(0, &params, &Empty).unwrap();
+    let importance: Vec<f32> = si.penalty().importance("toy.l0.weight").unwrap().to_vec1().unwrap();
+    for i in 0..2 {
+        let start = [1.0f32, -1.0][i];
+        let want = (omega[i] / ((theta[i] - start).powi(2) + 0.1)).max(0.0);
+        assert!((importance[i] - want).abs() < 1e-5, "Omega {importance:?}, want {want} at {i}");
+    }
+    assert_eq!(si.penalty().anchor("toy.l0.weight").unwrap().to_vec1::<f32>().unwrap(), theta);
+}
+
+const TOY: &str =
+    "seed = 2\niterations = 60\n[run]\nlearner = \"toy\"\n[method.ewc]\nlambda = 100.0\n[method.si]\nc = 1.0\n\
+[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n";
+
+fn toy_run(method: &str, dir: &std::path::Path) -> quadcl::engine::MetricsFile {
+    let cfg = dir.join("run.toml");
+    std::fs::write(&cfg, TOY).unwrap();
+    let options = RunOptions { method: Some(method.into()), ..Default::default() };
+    run(&cfg, &dir.join(method), options).unwrap()
+}
+
+#[test]
+fn finetune_forgets_on_the_toy_sequence_ours_does_not_and_ewc_forgets_less() {
+    let tmp = tempfile::tempdir().unwrap();
+    let forgetting = |m: &str| toy_run(m, tmp.path()).summary.forgetting.unwrap();
+    let (ours, finetune, ewc) = (forgetting("ours"), forgetting("finetune"), forgetting("ewc"));
+    assert_eq!(ours, 0.0);
+    assert!(finetune > 0.01, "finetune forgot only {finetune}");
+    assert!(ewc < finetune, "ewc forgot {ewc}, finetune {finetune}");
+    let json = assert_metrics_json_complete(&tmp.path().join("ewc"));
+    assert_eq!((json["method"].as_str(), json["method_settings"]["lambda"].as_f64()), (Some("ewc"), Some(100.0)));
+    assert!(json["curves"][1]["performance"].as_array().unwrap().len() == 60);
+}
+
+#[test]
+fn a_dense_run_resumed_after_an_interruption_gives_the_same_metrics() {
+    for method in ["finetune", "ewc", "si"] {
+        let tmp = tempfile::tempdir().unwrap();
+        let whole = toy_run(method, tmp.path());
+        let cfg = tmp.path().join("run.toml");
+        let out = tmp.path().join("parts");
+        let options =
+            |resume, stop_after| RunOptions { resume, stop_after, method: Some(method.into()), ..Default::default() };
+        run(&cfg, &out, options(false, Some(1))).unwrap();
+        let resumed = run(&cfg, &out, options(true, None)).unwrap();
+        assert_eq!(resumed.eval_matrix, whole.eval_matrix, "{method}");
+        assert_eq!(resumed.summary, whole.summary, "{method}");
+        // Without the same --method the stored run differs: an error, not a silent switch.
+        let err = format!("{:#}", run(&cfg, &out, RunOptions { resume: true, ..Default::default() }).unwrap_err());
+        assert!(err.contains(method) && err.contains("ours"), "{err}");
+    }
+}
+
+#[test]
+fn ewc_state_round_trips_through_its_tensors() {
+    let p = param("actor.l0.weight", &[1.0, 2.0]);
+    let mut ewc = EwcHooks::new(EwcConfig::default());
+    let sample = Linear { w: &param("actor.l0.weight", &[1.0, 0.0, 0.0, 1.0]), xs: vec![[1.0, 1.0]] };
+    ewc.on_task_end(0, std::slice::from_ref(sample.w), &sample).unwrap();
+    let mut restored = EwcHooks::new(EwcConfig::default());
+    restored.load_state(&ewc.state().unwrap()).unwrap();
+    let (a, b) = (ewc.penalty(), restored.penalty());
+    assert_eq!(
+        a.importance(&p.name).unwrap().to_vec1::<f32>().unwrap(),
+        b.importance(&p.name).unwrap().to_vec1::<f32>().unwrap()
+    );
+    assert_eq!(a.anchor(&p.name).unwrap().to_vec1::<f32>().unwrap(), [1.0, 0.0, 0.0, 1.0]);
+}
