@@ -6,7 +6,7 @@
 mod engine_common;
 use candle_core::{backprop::GradStore, Device, Tensor, Var};
 use engine_common::assert_metrics_json_complete;
-use quadcl::cl::{diagonal_fisher, EwcConfig, EwcHooks, QuadraticPenalty, SiConfig, SiHooks};
+use quadcl::cl::{diagonal_fisher, EwcConfig, EwcHooks, QuadraticPenalty, RwalkConfig, RwalkHooks, SiConfig, SiHooks};
 use quadcl::headless::{run, RunOptions};
 use quadcl::nn::Param;
 use quadcl::rl::{OutputSample, UpdateHooks};
@@ -92,16 +92,7 @@ fn si_omega_is_the_path_integral_of_the_task_gradient_on_a_quadratic() {
     for i in 0..2 {
         assert!((got[i] - omega[i]).abs() < 1e-6, "omega {got:?}, by hand {omega:?}");
     }
-    struct Empty;
-    impl OutputSample for Empty {
-        fn len(&self) -> usize {
-            0
-        }
-        fn scaled_output(&self, _: usize) -> anyhow::Result<Tensor> {
-            unreachable!()
-        }
-    }
-    si.on_task_end(0, &params, &Empty).unwrap();
+    si.on_task_end(0, &params, &NoSample).unwrap();
     let importance: Vec<f32> = si.penalty().importance("toy.l0.weight").unwrap().to_vec1().unwrap();
     for i in 0..2 {
         let start = [1.0f32, -1.0][i];
@@ -128,6 +119,7 @@ fn finetune_forgets_on_the_toy_sequence_ours_does_not_and_ewc_forgets_less() {
     let forgetting = |m: &str| toy_run(m, tmp.path()).summary.forgetting.unwrap();
     let (ours, finetune, ewc) = (forgetting("ours"), forgetting("finetune"), forgetting("ewc"));
     assert_eq!(ours, 0.0);
+    assert_eq!(forgetting("wsn"), 0.0, "wsn's reused weights are frozen too");
     assert!(finetune > 0.01, "finetune forgot only {finetune}");
     assert!(ewc < finetune, "ewc forgot {ewc}, finetune {finetune}");
     let json = assert_metrics_json_complete(&tmp.path().join("ewc"));
@@ -137,7 +129,7 @@ fn finetune_forgets_on_the_toy_sequence_ours_does_not_and_ewc_forgets_less() {
 
 #[test]
 fn a_dense_run_resumed_after_an_interruption_gives_the_same_metrics() {
-    for method in ["finetune", "ewc", "si"] {
+    for method in ["finetune", "ewc", "si", "rwalk", "wsn"] {
         let tmp = tempfile::tempdir().unwrap();
         let whole = toy_run(method, tmp.path());
         let cfg = tmp.path().join("run.toml");
@@ -168,4 +160,65 @@ fn ewc_state_round_trips_through_its_tensors() {
         b.importance(&p.name).unwrap().to_vec1::<f32>().unwrap()
     );
     assert_eq!(a.anchor(&p.name).unwrap().to_vec1::<f32>().unwrap(), [1.0, 0.0, 0.0, 1.0]);
+}
+
+/// No samples: for hooks whose task end does not probe the policy.
+struct NoSample;
+
+impl OutputSample for NoSample {
+    fn len(&self) -> usize {
+        0
+    }
+
+    fn scaled_output(&self, _: usize) -> anyhow::Result<Tensor> {
+        anyhow::bail!("no samples")
+    }
+}
+
+#[test]
+fn rwalk_score_is_the_fisher_normalised_path_integral_and_its_importance_is_normalised() {
+    // L = 0.5 sum a_i theta_i^2, plain gradient steps of 0.1; alpha 1 and a Fisher update
+    // every step make F the last squared gradient.
+    let a = [1.0f32, 4.0];
+    let p = param("toy.l0.weight", &[1.0, -1.0]);
+    let params = [p.clone()];
+    let cfg = RwalkConfig { lambda: 1.0, alpha: 1.0, fisher_every: 1, eps: 1e-8 };
+    let mut rwalk = RwalkHooks::new(cfg);
+    rwalk.on_task_start(0, &params).unwrap();
+    let mut theta = [1.0f32, -1.0];
+    let mut s = [0.0f32; 2];
+    for _ in 0..3 {
+        let coeff = Tensor::new(&a, &Device::Cpu).unwrap();
+        let loss = p.var.as_tensor().sqr().unwrap().mul(&coeff).unwrap().sum_all().unwrap().affine(0.5, 0.0).unwrap();
+        let mut grads: GradStore = loss.backward().unwrap();
+        rwalk.adjust_gradients(&params, &mut grads).unwrap();
+        for i in 0..2 {
+            let g = a[i] * theta[i];
+            let next = theta[i] - 0.1 * g;
+            let delta = next - theta[i];
+            s[i] += -g * delta / (0.5 * g * g * delta * delta + 1e-8);
+            theta[i] = next;
+        }
+        p.var.set(&Tensor::new(&theta, &Device::Cpu).unwrap()).unwrap();
+        rwalk.after_step(&params).unwrap();
+    }
+    let fisher: Vec<f32> = rwalk.fisher("toy.l0.weight").unwrap().to_vec1().unwrap();
+    rwalk.on_task_end(0, &params, &NoSample).unwrap();
+    let importance: Vec<f32> = rwalk.penalty().importance("toy.l0.weight").unwrap().to_vec1().unwrap();
+    let (f_max, s_max) = (fisher[0].max(fisher[1]), s[0].max(s[1]));
+    for i in 0..2 {
+        let want = fisher[i] / f_max + s[i].max(0.0) / s_max;
+        assert!(
+            (importance[i] - want).abs() < 1e-4 * want.abs().max(1.0),
+            "importance {importance:?} at {i}, want {want}"
+        );
+    }
+    // A second task averages its normalised score with the first's and replaces the importance.
+    let mut restored = RwalkHooks::new(RwalkConfig::default());
+    restored.load_state(&rwalk.state().unwrap()).unwrap();
+    assert_eq!(
+        restored.penalty().importance("toy.l0.weight").unwrap().to_vec1::<f32>().unwrap(),
+        importance,
+        "the state round-trips"
+    );
 }

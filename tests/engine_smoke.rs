@@ -135,7 +135,7 @@ fn a_run_with_record_keeps_one_mcap_episode_of_every_learned_task_after_each_ste
 #[test]
 fn every_baseline_runs_the_smoke_sequence_on_dense_networks_and_its_checkpoints_evaluate() {
     let tmp = tempfile::tempdir().unwrap();
-    for method in ["finetune", "ewc", "si"] {
+    for method in ["finetune", "ewc", "si", "rwalk"] {
         let out = tmp.path().join(method);
         let m = run(&smoke(), &out, RunOptions { method: Some(method.into()), ..Default::default() }).unwrap();
         assert_eq!((m.completed_steps, m.method.as_str()), (3, method));

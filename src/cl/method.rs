@@ -14,28 +14,32 @@
 use super::ewc::{Ewc, EwcConfig};
 use super::finetune::Finetune;
 use super::ours::{Ours, Switches};
+use super::rwalk::{Rwalk, RwalkConfig};
 use super::si::{Si, SiConfig};
+use super::wsn::Wsn;
 use crate::config::net::MaskConfig;
 use crate::nn::{NetworkKind, TaskId};
 use crate::rl::{NoHooks, UpdateHooks};
 use serde::{Deserialize, Serialize};
 
 /// The implemented methods' names.
-pub const METHODS: [&str; 4] = ["ours", "finetune", "ewc", "si"];
+pub const METHODS: [&str; 6] = ["ours", "wsn", "finetune", "ewc", "si", "rwalk"];
 
-/// Every method's settings: `[method.ewc]`, `[method.si]` (`ours`' switches are `[method]`'s own keys).
+/// Every method's settings: `[method.ewc]`, `[method.si]`, `[method.rwalk]` (`ours`' switches are `[method]`'s own keys).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MethodSettings {
     pub ewc: EwcConfig,
     pub si: SiConfig,
+    pub rwalk: RwalkConfig,
 }
 
 impl MethodSettings {
     /// Errors name the table and key.
     pub fn validate(&self) -> anyhow::Result<()> {
         self.ewc.validate()?;
-        self.si.validate()
+        self.si.validate()?;
+        self.rwalk.validate()
     }
 }
 
@@ -85,9 +89,11 @@ pub trait ContinualMethod: Send {
 pub fn method_by_name(name: &str, settings: &MethodSettings) -> anyhow::Result<Box<dyn ContinualMethod>> {
     match name {
         "ours" => Ok(Box::new(Ours)),
+        "wsn" => Ok(Box::new(Wsn)),
         "finetune" => Ok(Box::new(Finetune)),
         "ewc" => Ok(Box::new(Ewc { cfg: settings.ewc.clone() })),
         "si" => Ok(Box::new(Si { cfg: settings.si.clone() })),
+        "rwalk" => Ok(Box::new(Rwalk { cfg: settings.rwalk.clone() })),
         other => anyhow::bail!("unknown method {other:?}: the implemented methods are {METHODS:?}"),
     }
 }
@@ -107,11 +113,11 @@ mod tests {
     }
 
     #[test]
-    fn only_ours_trains_masked_networks() {
+    fn only_the_mask_methods_train_masked_networks() {
         let settings = MethodSettings::default();
         for name in METHODS {
             let kind = method_by_name(name, &settings).unwrap().network_kind();
-            assert_eq!(kind == NetworkKind::Masked, name == "ours", "{name}");
+            assert_eq!(kind == NetworkKind::Masked, ["ours", "wsn"].contains(&name), "{name}");
         }
     }
 }

@@ -4,7 +4,8 @@
 //!
 //! - `method`: [`ContinualMethod`], hooks around one training loop, and the method by name;
 //! - `ours`: the paper's method and its [`Switches`];
-//! - `finetune`, `ewc`, `si`: the baselines on the dense network (METHOD.md 3);
+//! - `wsn`: WSN, `ours` with the per-layer rule and its plasticity mechanisms off;
+//! - `finetune`, `ewc`, `si`, `rwalk`: the baselines on the dense network (METHOD.md 3);
 //! - `quadratic_penalty`: the anchored penalty EWC and SI share;
 //! - `sequence`: a [`Sequence`] of tasks as written in a run file;
 //! - `metrics`: the evaluation matrix [`EvalMatrix`] and the measures on it.
@@ -15,8 +16,10 @@ mod method;
 mod metrics;
 mod ours;
 mod quadratic_penalty;
+mod rwalk;
 mod sequence;
 mod si;
+mod wsn;
 
 pub use ewc::{diagonal_fisher, Ewc, EwcConfig, EwcHooks};
 pub use finetune::Finetune;
@@ -24,5 +27,7 @@ pub use method::{method_by_name, ContinualMethod, MethodSettings, METHODS};
 pub use metrics::{curve_auc, forward_transfer, EvalMatrix};
 pub use ours::{LambdaMode, Ours, SwitchOverrides, Switches};
 pub use quadratic_penalty::{is_regularised, QuadraticPenalty};
+pub use rwalk::{Rwalk, RwalkConfig, RwalkHooks};
 pub use sequence::{KnownBefore, Sequence, TaskSpec, TransferInit};
 pub use si::{Si, SiConfig, SiHooks};
+pub use wsn::{Wsn, WSN_SIGMA};

@@ -64,6 +64,12 @@ impl QuadraticPenalty {
         Ok(())
     }
 
+    /// Makes `importance` the parameter's importance (not added to the old one) and `anchor` its anchor.
+    pub fn replace(&mut self, name: &str, importance: Tensor, anchor: Tensor) -> anyhow::Result<()> {
+        self.terms.remove(name);
+        self.accumulate(name, importance, anchor)
+    }
+
     /// The accumulated importance of a parameter.
     pub fn importance(&self, name: &str) -> Option<&Tensor> {
         self.terms.get(name).map(|t| &t.importance)

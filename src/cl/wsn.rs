@@ -1,0 +1,59 @@
+//! `wsn`: Winning SubNetworks (Kang et al., ICML 2022), as the paper compares
+//! it (METHOD.md 3). It is `ours` with three mechanisms off, so it shares all
+//! of `ours`' code (the masked networks) and only sets the mask rules:
+//!
+//! - one top-k over the whole layer (the `per-layer` lambda mode), which
+//!   reuses occupied weights freely: no vacant / occupied split per row;
+//! - no re-initialisation of vacant weights, no soft-score entropy, no
+//!   private elements (`reinit`, `entropy` off, `private_share` 0);
+//! - deterministic scores: sigma is 1e-6 of the 0.3 score spread and never
+//!   trains (`entropy_iterations` 0), so the mask is the top-k of the score
+//!   means, straight-through as in WSN.
+//!
+//! Capacity c (the share of each layer a task selects) is the run's.
+
+use super::method::ContinualMethod;
+use super::ours::{LambdaMode, Switches};
+use crate::config::net::MaskConfig;
+
+/// The method `wsn`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Wsn;
+
+/// Sigma of the scores' sampling noise under `wsn` (against a score spread of about 0.3).
+pub const WSN_SIGMA: f64 = 1e-6;
+
+impl ContinualMethod for Wsn {
+    fn name(&self) -> &str {
+        "wsn"
+    }
+
+    fn task_mask_config(&self, base: &MaskConfig, switches: &Switches) -> anyhow::Result<MaskConfig> {
+        let wsn =
+            Switches { reinit: false, entropy: false, lambda: LambdaMode::PerLayer, private_share: 0.0, ..*switches };
+        let mut m = wsn.apply(base)?;
+        m.sigma_init = WSN_SIGMA;
+        m.sigma_floor = m.sigma_floor.min(WSN_SIGMA);
+        m.entropy_iterations = 0;
+        m.validate()?;
+        Ok(m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::net::SelectionRule;
+
+    #[test]
+    fn wsn_is_ours_with_the_per_layer_rule_and_every_plasticity_mechanism_off() {
+        let switches = Switches { capacity: 0.3, ..Switches::default() };
+        let m = Wsn.task_mask_config(&MaskConfig::default(), &switches).unwrap();
+        assert_eq!(
+            (m.rule, m.reinit, m.entropy, m.private_share, m.capacity, m.entropy_iterations),
+            (SelectionRule::PerLayer, false, false, 0.0, 0.3, 0)
+        );
+        assert!(m.sigma_init <= WSN_SIGMA && m.sigma_floor <= WSN_SIGMA);
+        assert_eq!(m.score_init_std, MaskConfig::default().score_init_std, "the rest is the run's");
+    }
+}
