@@ -1,15 +1,22 @@
 //! The baselines' defining behaviour, each on a tiny problem with a
 //! hand-computed answer: EWC's penalty gradient and Fisher, SI's path
-//! integral, and on the toy learner's sequence that finetune forgets, `ours`
-//! does not, and EWC forgets less than finetune; a dense run resumes exactly.
+//! integral, RWalk's normalised score, ER's loss, A-GEM's projection; and on
+//! the toy learner's sequence that finetune forgets, `ours` and `wsn` do not,
+//! EWC forgets less than finetune, and every method's run resumes exactly.
 
 mod engine_common;
 use candle_core::{backprop::GradStore, Device, Tensor, Var};
 use engine_common::assert_metrics_json_complete;
-use quadcl::cl::{diagonal_fisher, EwcConfig, EwcHooks, QuadraticPenalty, RwalkConfig, RwalkHooks, SiConfig, SiHooks};
+use quadcl::cl::{
+    diagonal_fisher, project, ErConfig, ErHooks, EwcConfig, EwcHooks, QuadraticPenalty, RwalkConfig, RwalkHooks,
+    SiConfig, SiHooks,
+};
 use quadcl::headless::{run, RunOptions};
 use quadcl::nn::Param;
+use quadcl::nn::TaskId;
+use quadcl::rl::{NoProbe, PolicyProbe};
 use quadcl::rl::{OutputSample, UpdateHooks};
+use rand::{Rng, SeedableRng};
 
 fn param(name: &str, values: &[f32]) -> Param {
     let var = Var::from_tensor(&Tensor::new(values, &Device::Cpu).unwrap()).unwrap();
@@ -78,7 +85,7 @@ fn si_omega_is_the_path_integral_of_the_task_gradient_on_a_quadratic() {
         let coeff = Tensor::new(&a, &Device::Cpu).unwrap();
         let loss = p.var.as_tensor().sqr().unwrap().mul(&coeff).unwrap().sum_all().unwrap().affine(0.5, 0.0).unwrap();
         let mut grads: GradStore = loss.backward().unwrap();
-        si.adjust_gradients(&params, &mut grads).unwrap();
+        si.adjust_gradients(&params, &mut grads, &NoProbe).unwrap();
         let g: Vec<f32> = (0..2).map(|i| a[i] * theta[i]).collect();
         for i in 0..2 {
             let next = theta[i] - 0.1 * g[i];
@@ -114,7 +121,7 @@ fn toy_run(method: &str, dir: &std::path::Path) -> quadcl::engine::MetricsFile {
 }
 
 #[test]
-fn finetune_forgets_on_the_toy_sequence_ours_does_not_and_ewc_forgets_less() {
+fn finetune_forgets_on_the_toy_sequence_the_mask_methods_do_not_and_every_other_method_forgets_less() {
     let tmp = tempfile::tempdir().unwrap();
     let forgetting = |m: &str| toy_run(m, tmp.path()).summary.forgetting.unwrap();
     let (ours, finetune, ewc) = (forgetting("ours"), forgetting("finetune"), forgetting("ewc"));
@@ -122,6 +129,10 @@ fn finetune_forgets_on_the_toy_sequence_ours_does_not_and_ewc_forgets_less() {
     assert_eq!(forgetting("wsn"), 0.0, "wsn's reused weights are frozen too");
     assert!(finetune > 0.01, "finetune forgot only {finetune}");
     assert!(ewc < finetune, "ewc forgot {ewc}, finetune {finetune}");
+    for method in ["si", "rwalk", "er", "agem"] {
+        let f = forgetting(method);
+        assert!(f < finetune / 3.0, "{method} forgot {f}, finetune {finetune}: it protects nothing");
+    }
     let json = assert_metrics_json_complete(&tmp.path().join("ewc"));
     assert_eq!((json["method"].as_str(), json["method_settings"]["lambda"].as_f64()), (Some("ewc"), Some(100.0)));
     assert!(json["curves"][1]["performance"].as_array().unwrap().len() == 60);
@@ -129,7 +140,7 @@ fn finetune_forgets_on_the_toy_sequence_ours_does_not_and_ewc_forgets_less() {
 
 #[test]
 fn a_dense_run_resumed_after_an_interruption_gives_the_same_metrics() {
-    for method in ["finetune", "ewc", "si", "rwalk", "wsn"] {
+    for method in ["finetune", "ewc", "si", "rwalk", "wsn", "er", "agem"] {
         let tmp = tempfile::tempdir().unwrap();
         let whole = toy_run(method, tmp.path());
         let cfg = tmp.path().join("run.toml");
@@ -191,7 +202,7 @@ fn rwalk_score_is_the_fisher_normalised_path_integral_and_its_importance_is_norm
         let coeff = Tensor::new(&a, &Device::Cpu).unwrap();
         let loss = p.var.as_tensor().sqr().unwrap().mul(&coeff).unwrap().sum_all().unwrap().affine(0.5, 0.0).unwrap();
         let mut grads: GradStore = loss.backward().unwrap();
-        rwalk.adjust_gradients(&params, &mut grads).unwrap();
+        rwalk.adjust_gradients(&params, &mut grads, &NoProbe).unwrap();
         for i in 0..2 {
             let g = a[i] * theta[i];
             let next = theta[i] - 0.1 * g;
@@ -221,4 +232,95 @@ fn rwalk_score_is_the_fisher_normalised_path_integral_and_its_importance_is_norm
         importance,
         "the state round-trips"
     );
+}
+
+/// out = W x for one 2x2 W shared by every task (a probe of the `Linear` sample's network).
+struct LinearProbe<'a> {
+    w: &'a Param,
+}
+
+impl PolicyProbe for LinearProbe<'_> {
+    fn outputs(&self, _task: TaskId, inputs: &[f32], rows: usize) -> anyhow::Result<Tensor> {
+        let x = Tensor::from_slice(inputs, (rows, 2), &Device::Cpu)?;
+        Ok(x.matmul(&self.w.var.as_tensor().reshape((2, 2))?.t()?)?)
+    }
+}
+
+/// The `Linear` sample with rehearsal rows (sigma 0.5).
+struct Rehearsal<'a>(Linear<'a>);
+
+impl OutputSample for Rehearsal<'_> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn scaled_output(&self, i: usize) -> anyhow::Result<Tensor> {
+        self.0.scaled_output(i)
+    }
+
+    fn replay_row(&self, i: usize) -> anyhow::Result<(Vec<f32>, Vec<f32>)> {
+        Ok((self.0.xs[i].to_vec(), self.0.scaled_output(i)?.to_vec1()?))
+    }
+
+    fn sigma(&self) -> anyhow::Result<Vec<f32>> {
+        Ok(vec![0.5, 0.5])
+    }
+}
+
+#[test]
+fn er_loss_is_zero_when_the_policy_equals_the_stored_one_and_grows_as_it_moves() {
+    let w = param("actor.l0.weight", &[0.3, -0.2, 0.1, 0.7]);
+    let rows = [[1.0f32, 2.0], [3.0, -1.0], [0.5, 0.5]];
+    let sample = Rehearsal(Linear { w: &w, xs: rows.to_vec() });
+    let mut er = ErHooks::new(ErConfig { beta: 2.0, buffer_size: 10, batch_size: 6 });
+    er.on_task_end(0, std::slice::from_ref(&w), &sample).unwrap();
+    er.on_task_start(1, std::slice::from_ref(&w)).unwrap();
+    let probe = LinearProbe { w: &w };
+    let mut loss = || {
+        let (loss, metrics) = er.extra_loss(std::slice::from_ref(&w), &probe).unwrap().unwrap();
+        (f64::from(loss.to_scalar::<f32>().unwrap()), metrics["losses/er_clone_kl"])
+    };
+    assert_eq!(loss(), (0.0, 0.0));
+    // W + 0.1 everywhere moves both outputs of a row by 0.1 (x0 + x1): KL = 2 d^2 / (2 * 0.25).
+    w.var.set(&Tensor::new(&[0.4f32, -0.1, 0.2, 0.8], &Device::Cpu).unwrap()).unwrap();
+    let (weighted, kl) = loss();
+    assert!(kl > 0.0 && (weighted - 2.0 * kl).abs() < 1e-5, "beta * KL: {weighted} vs {kl}");
+    let max_kl = rows.iter().map(|x| f64::from(2.0 * (0.1 * (x[0] + x[1])).powi(2) / 0.5)).fold(0.0, f64::max);
+    assert!(kl <= max_kl + 1e-6, "KL {kl} above the largest row's {max_kl}");
+}
+
+#[test]
+fn agem_projection_never_leaves_a_negative_dot_product_with_the_reference() {
+    let p = [param("toy.l0.weight", &[0.0; 5]), param("toy.l0.bias", &[0.0; 3])];
+    // A GradStore of random gradients for both parameters, through a linear loss.
+    let store = |rng: &mut rand_chacha::ChaCha8Rng| -> GradStore {
+        let mut loss = Tensor::new(0f32, &Device::Cpu).unwrap();
+        for (q, n) in p.iter().zip([5usize, 3]) {
+            let c: Vec<f32> = (0..n).map(|_| rng.gen_range(-1.0f32..1.0)).collect();
+            let c = Tensor::new(c.as_slice(), &Device::Cpu).unwrap();
+            loss = loss.add(&q.var.as_tensor().mul(&c).unwrap().sum_all().unwrap()).unwrap();
+        }
+        loss.backward().unwrap()
+    };
+    let values = |g: &GradStore| -> Vec<f32> {
+        p.iter().flat_map(|q| g.get(q.var.as_tensor()).unwrap().to_vec1::<f32>().unwrap()).collect()
+    };
+    let dot = |a: &[f32], b: &[f32]| -> f32 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut projected = 0;
+    for _ in 0..200 {
+        let (mut g, reference) = (store(&mut rng), store(&mut rng));
+        let (before, r) = (values(&g), values(&reference));
+        let did = project(&p, &mut g, &reference).unwrap();
+        let after = values(&g);
+        assert!(dot(&after, &r) >= -1e-5, "projected g . g_ref = {}", dot(&after, &r));
+        assert_eq!(did, dot(&before, &r) < 0.0);
+        if did {
+            projected += 1;
+            assert!(dot(&after, &r).abs() < 1e-5, "a projection lands on the boundary");
+        } else {
+            assert_eq!(after, before, "an agreeing gradient is left alone");
+        }
+    }
+    assert!(projected > 50, "only {projected} of 200 random pairs disagreed");
 }

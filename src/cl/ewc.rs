@@ -20,7 +20,7 @@
 use super::method::ContinualMethod;
 use super::quadratic_penalty::{is_regularised, QuadraticPenalty};
 use crate::nn::{NetworkKind, Param, TaskId};
-use crate::rl::{Metrics, OutputSample, UpdateHooks};
+use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
 use candle_core::Tensor;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -129,7 +129,7 @@ pub fn diagonal_fisher(
 }
 
 impl UpdateHooks for EwcHooks {
-    fn extra_loss(&mut self, params: &[Param]) -> anyhow::Result<Option<(Tensor, Metrics)>> {
+    fn extra_loss(&mut self, params: &[Param], _probe: &dyn PolicyProbe) -> anyhow::Result<Option<(Tensor, Metrics)>> {
         let Some(loss) = self.penalty.loss(params, self.cfg.lambda)? else { return Ok(None) };
         let value = f64::from(loss.to_scalar::<f32>()?);
         Ok(Some((loss, Metrics::from([("losses/ewc_penalty".to_string(), value)]))))

@@ -11,6 +11,8 @@
 //! ([`MethodSettings`]); every table parses whatever the method, so a run
 //! switches method by changing one word.
 
+use super::agem::Agem;
+use super::er::{Er, ErConfig};
 use super::ewc::{Ewc, EwcConfig};
 use super::finetune::Finetune;
 use super::ours::{Ours, Switches};
@@ -23,15 +25,17 @@ use crate::rl::{NoHooks, UpdateHooks};
 use serde::{Deserialize, Serialize};
 
 /// The implemented methods' names.
-pub const METHODS: [&str; 6] = ["ours", "wsn", "finetune", "ewc", "si", "rwalk"];
+pub const METHODS: [&str; 8] = ["ours", "wsn", "finetune", "ewc", "si", "rwalk", "er", "agem"];
 
-/// Every method's settings: `[method.ewc]`, `[method.si]`, `[method.rwalk]` (`ours`' switches are `[method]`'s own keys).
+/// Every method's settings: `[method.ewc]`, `[method.si]`, `[method.rwalk]`, `[method.er]`, `[method.agem]` (`ours`' switches are `[method]`'s own keys).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MethodSettings {
     pub ewc: EwcConfig,
     pub si: SiConfig,
     pub rwalk: RwalkConfig,
+    pub er: ErConfig,
+    pub agem: ErConfig,
 }
 
 impl MethodSettings {
@@ -39,7 +43,9 @@ impl MethodSettings {
     pub fn validate(&self) -> anyhow::Result<()> {
         self.ewc.validate()?;
         self.si.validate()?;
-        self.rwalk.validate()
+        self.rwalk.validate()?;
+        self.er.validate("er")?;
+        self.agem.validate("agem")
     }
 }
 
@@ -94,6 +100,8 @@ pub fn method_by_name(name: &str, settings: &MethodSettings) -> anyhow::Result<B
         "ewc" => Ok(Box::new(Ewc { cfg: settings.ewc.clone() })),
         "si" => Ok(Box::new(Si { cfg: settings.si.clone() })),
         "rwalk" => Ok(Box::new(Rwalk { cfg: settings.rwalk.clone() })),
+        "er" => Ok(Box::new(Er { cfg: settings.er.clone() })),
+        "agem" => Ok(Box::new(Agem { cfg: settings.agem.clone() })),
         other => anyhow::bail!("unknown method {other:?}: the implemented methods are {METHODS:?}"),
     }
 }

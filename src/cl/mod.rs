@@ -5,28 +5,35 @@
 //! - `method`: [`ContinualMethod`], hooks around one training loop, and the method by name;
 //! - `ours`: the paper's method and its [`Switches`];
 //! - `wsn`: WSN, `ours` with the per-layer rule and its plasticity mechanisms off;
-//! - `finetune`, `ewc`, `si`, `rwalk`: the baselines on the dense network (METHOD.md 3);
+//! - `finetune`, `ewc`, `si`, `rwalk`, `er`, `agem`: the baselines on the dense network (METHOD.md 3);
+//! - `replay`: the rehearsal buffers and behaviour-cloning loss ER and A-GEM share;
 //! - `quadratic_penalty`: the anchored penalty EWC and SI share;
 //! - `sequence`: a [`Sequence`] of tasks as written in a run file;
 //! - `metrics`: the evaluation matrix [`EvalMatrix`] and the measures on it.
 
+mod agem;
+mod er;
 mod ewc;
 mod finetune;
 mod method;
 mod metrics;
 mod ours;
 mod quadratic_penalty;
+mod replay;
 mod rwalk;
 mod sequence;
 mod si;
 mod wsn;
 
+pub use agem::{project, Agem, AgemHooks};
+pub use er::{Er, ErConfig, ErHooks};
 pub use ewc::{diagonal_fisher, Ewc, EwcConfig, EwcHooks};
 pub use finetune::Finetune;
 pub use method::{method_by_name, ContinualMethod, MethodSettings, METHODS};
 pub use metrics::{curve_auc, forward_transfer, EvalMatrix};
 pub use ours::{LambdaMode, Ours, SwitchOverrides, Switches};
 pub use quadratic_penalty::{is_regularised, QuadraticPenalty};
+pub use replay::{ReplayBuffers, TaskReplay};
 pub use rwalk::{Rwalk, RwalkConfig, RwalkHooks};
 pub use sequence::{KnownBefore, Sequence, TaskSpec, TransferInit};
 pub use si::{Si, SiConfig, SiHooks};

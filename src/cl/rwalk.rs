@@ -22,7 +22,7 @@
 use super::method::ContinualMethod;
 use super::quadratic_penalty::{is_regularised, QuadraticPenalty};
 use crate::nn::{NetworkKind, Param, TaskId};
-use crate::rl::{Metrics, OutputSample, UpdateHooks};
+use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
 use candle_core::backprop::GradStore;
 use candle_core::Tensor;
 use serde::{Deserialize, Serialize};
@@ -159,7 +159,12 @@ impl UpdateHooks for RwalkHooks {
         Ok(())
     }
 
-    fn adjust_gradients(&mut self, params: &[Param], grads: &mut GradStore) -> anyhow::Result<()> {
+    fn adjust_gradients(
+        &mut self,
+        params: &[Param],
+        grads: &mut GradStore,
+        _probe: &dyn PolicyProbe,
+    ) -> anyhow::Result<()> {
         let update_fisher = self.steps % self.cfg.fisher_every == 0;
         for p in params {
             let Some(path) = self.paths.get_mut(&p.name) else { continue };
@@ -175,7 +180,7 @@ impl UpdateHooks for RwalkHooks {
         Ok(())
     }
 
-    fn extra_loss(&mut self, params: &[Param]) -> anyhow::Result<Option<(Tensor, Metrics)>> {
+    fn extra_loss(&mut self, params: &[Param], _probe: &dyn PolicyProbe) -> anyhow::Result<Option<(Tensor, Metrics)>> {
         let Some(loss) = self.penalty.loss(params, self.cfg.lambda)? else { return Ok(None) };
         let value = f64::from(loss.to_scalar::<f32>()?);
         Ok(Some((loss, Metrics::from([("losses/rwalk_penalty".to_string(), value)]))))

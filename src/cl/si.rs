@@ -17,7 +17,7 @@
 use super::method::ContinualMethod;
 use super::quadratic_penalty::{is_regularised, QuadraticPenalty};
 use crate::nn::{NetworkKind, Param, TaskId};
-use crate::rl::{Metrics, OutputSample, UpdateHooks};
+use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
 use candle_core::backprop::GradStore;
 use candle_core::Tensor;
 use serde::{Deserialize, Serialize};
@@ -129,7 +129,12 @@ impl UpdateHooks for SiHooks {
         Ok(())
     }
 
-    fn adjust_gradients(&mut self, params: &[Param], grads: &mut GradStore) -> anyhow::Result<()> {
+    fn adjust_gradients(
+        &mut self,
+        params: &[Param],
+        grads: &mut GradStore,
+        _probe: &dyn PolicyProbe,
+    ) -> anyhow::Result<()> {
         for p in params {
             if let Some(path) = self.paths.get_mut(&p.name) {
                 path.gradient = grads.get(p.var.as_tensor()).map(|g| g.copy().map(|g| g.detach())).transpose()?;
@@ -138,7 +143,7 @@ impl UpdateHooks for SiHooks {
         Ok(())
     }
 
-    fn extra_loss(&mut self, params: &[Param]) -> anyhow::Result<Option<(Tensor, Metrics)>> {
+    fn extra_loss(&mut self, params: &[Param], _probe: &dyn PolicyProbe) -> anyhow::Result<Option<(Tensor, Metrics)>> {
         let Some(loss) = self.penalty.loss(params, self.cfg.c)? else { return Ok(None) };
         let value = f64::from(loss.to_scalar::<f32>()?);
         Ok(Some((loss, Metrics::from([("losses/si_penalty".to_string(), value)]))))

@@ -136,14 +136,14 @@ impl RunConfig {
                     Some(other) => anyhow::bail!("[method] name = {other}: expected a string"),
                 };
                 let mut settings = toml::Table::new();
-                for key in ["ewc", "si", "rwalk"] {
+                for key in ["ewc", "si", "rwalk", "er", "agem"] {
                     if let Some(v) = t.remove(key) {
                         settings.insert(key.into(), v);
                     }
                 }
                 let settings: MethodSettings = toml::Value::Table(settings)
                     .try_into()
-                    .map_err(|e| anyhow::anyhow!("in [method.ewc], [method.si] or [method.rwalk]: {e}"))?;
+                    .map_err(|e| anyhow::anyhow!("in a [method.NAME] table: {e}"))?;
                 settings.validate()?;
                 let o: SwitchOverrides =
                     toml::Value::Table(t).try_into().map_err(|e| anyhow::anyhow!("in [method]: {e}"))?;

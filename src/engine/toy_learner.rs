@@ -14,7 +14,7 @@ use crate::nn::{
     checkpoint, mask_report, mask_views, transfer_lift, AdamConfig, DenseMlp, LayerLift, LayerView, MaskReport,
     MaskedAdam, MaskedMlp, Network, NetworkKind, TaskId,
 };
-use crate::rl::{apply_hooks, metric_names, EvalReport, Metrics, NoHooks, OutputSample, UpdateHooks};
+use crate::rl::{apply_hooks, metric_names, EvalReport, Metrics, NoHooks, OutputSample, PolicyProbe, UpdateHooks};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use rand::{Rng, SeedableRng};
@@ -116,7 +116,7 @@ impl Learner for ToyLearner {
         let loss = mse.add(&self.net.soft_score_loss()?)?;
         let params = self.net.params();
         let mut grads = loss.backward()?;
-        let mut m = apply_hooks(self.hooks.as_mut(), &params, &mut grads)?;
+        let mut m = apply_hooks(self.hooks.as_mut(), &params, &mut grads, &ToyProbe { net: &self.net })?;
         self.optimizer.step(&params, &grads)?;
         self.hooks.after_step(&params)?;
         self.iteration += 1;
@@ -235,5 +235,25 @@ impl OutputSample for ToySample<'_> {
         anyhow::ensure!(i < self.len(), "sample {i} of {}", self.len());
         let x = Tensor::from_slice(&self.x[i * IN..(i + 1) * IN], (1, IN), &Device::Cpu)?;
         Ok(self.net.forward(&x)?.squeeze(0)?)
+    }
+
+    fn replay_row(&self, i: usize) -> anyhow::Result<(Vec<f32>, Vec<f32>)> {
+        let out = self.scaled_output(i)?.detach().to_vec1()?;
+        Ok((self.x[i * IN..(i + 1) * IN].to_vec(), out))
+    }
+
+    fn sigma(&self) -> anyhow::Result<Vec<f32>> {
+        Ok(vec![1.0; OUT])
+    }
+}
+
+/// The toy network running any trained task (its head, today's trunk), differentiably.
+struct ToyProbe<'a> {
+    net: &'a Network,
+}
+
+impl PolicyProbe for ToyProbe<'_> {
+    fn outputs(&self, task: TaskId, inputs: &[f32], rows: usize) -> anyhow::Result<Tensor> {
+        self.net.forward_of_task(task, &Tensor::from_slice(inputs, (rows, IN), &Device::Cpu)?)
     }
 }

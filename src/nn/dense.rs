@@ -260,6 +260,12 @@ impl DenseMlp {
         self.run(x, &self.theta(self.head_of(task)?, false)?, false)
     }
 
+    /// Task `task`'s forward (its head, today's trunk), differentiable in both: how a
+    /// rehearsal loss pulls the shared trunk back towards an earlier task's outputs.
+    pub fn forward_of_task(&self, task: TaskId, x: &Tensor) -> anyhow::Result<Tensor> {
+        self.run(x, &self.theta(self.head_of(task)?, true)?, true)
+    }
+
     /// The weights of [`Self::forward`] (`None`) or [`Self::forward_task`], detached.
     pub fn frozen_weights(&self, task: Option<TaskId>) -> anyhow::Result<FrozenWeights> {
         let head = match task {

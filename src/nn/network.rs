@@ -193,6 +193,15 @@ impl Network {
         }
     }
 
+    /// Task `task`'s forward, differentiable in what trains (dense: the shared trunk and the
+    /// task's head); a masked network's recall, which nothing moves, is a constant.
+    pub fn forward_of_task(&self, task: TaskId, x: &Tensor) -> anyhow::Result<Tensor> {
+        match self {
+            Self::Masked(n) => n.forward_task(task, x),
+            Self::Dense(n) => n.forward_of_task(task, x),
+        }
+    }
+
     /// The weights of the training forward (`None`) or of `task`'s, detached, to run many batches.
     pub fn frozen_weights(&self, task: Option<TaskId>) -> anyhow::Result<FrozenWeights> {
         match self {

@@ -61,4 +61,4 @@ pub use robot_view::{RobotFrame, RobotViewer};
 pub use sim_env::SimTrainEnv;
 pub use toy_env::ToyEnv;
 pub use trainer::{load_resume_point, train, train_from, TrainSummary, TrainerState};
-pub use update_hooks::{apply_hooks, NoHooks, OutputSample, UpdateHooks};
+pub use update_hooks::{apply_hooks, NoHooks, NoProbe, OutputSample, PolicyProbe, UpdateHooks};

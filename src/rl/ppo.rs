@@ -27,7 +27,7 @@ use super::losses::{
 };
 use super::metrics::{names, Metrics};
 use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, RolloutRow};
-use super::rollout_sample::RolloutSample;
+use super::rollout_sample::{AgentProbe, RolloutSample};
 use super::update_hooks::{apply_hooks, NoHooks, UpdateHooks};
 use crate::config::PpoConfig;
 use crate::nn::{AdamConfig, MaskedAdam};
@@ -327,7 +327,7 @@ impl PpoLearner {
                 add(&mut sums, "losses/soft_score", &soft_score)?;
                 // The method sees the task gradient, then adds its own loss' gradient.
                 let params = agent.params();
-                for (k, v) in apply_hooks(hooks, &params, &mut grads)? {
+                for (k, v) in apply_hooks(hooks, &params, &mut grads, &AgentProbe::new(agent))? {
                     *sums.entry(k).or_default() += v;
                 }
 

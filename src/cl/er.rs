@@ -1,0 +1,129 @@
+//! `er`: experience replay for a policy (Rolnick et al. 2019's behaviour
+//! cloning; Continual World's `reservoir` / `er` baselines), on the dense
+//! network (METHOD.md 3). At each task's end `buffer_size` of its inputs are
+//! kept with the policy's Gaussian on them (`cl/replay.rs`); while later tasks
+//! train, every optimiser step adds
+//! `beta * mean_tasks mean_rows KL(stored Gaussian || current policy of that task)`
+//! on a batch of `batch_size` rows spread over the earlier tasks. Each task is
+//! run through its own head on today's trunk; the loss' gradient reaches the
+//! shared trunk (the earlier heads are not trained again).
+//!
+//! Settings: `[method.er]` `beta` (1.0), `buffer_size` (1000 rows per task),
+//! `batch_size` (256).
+
+use super::method::ContinualMethod;
+use super::replay::ReplayBuffers;
+use crate::nn::{NetworkKind, Param, TaskId};
+use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
+use candle_core::Tensor;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// `[method.er]` (A-GEM's `[method.agem]` has the same rehearsal keys).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ErConfig {
+    /// Weight beta of the behaviour-cloning loss.
+    pub beta: f64,
+    /// Rows kept per finished task.
+    pub buffer_size: usize,
+    /// Replay rows per optimiser step, spread over the earlier tasks.
+    pub batch_size: usize,
+}
+
+impl Default for ErConfig {
+    fn default() -> Self {
+        Self { beta: 1.0, buffer_size: 1000, batch_size: 256 }
+    }
+}
+
+impl ErConfig {
+    /// Errors name `table` and the key.
+    pub fn validate(&self, table: &str) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            self.beta.is_finite() && self.beta >= 0.0,
+            "[method.{table}] beta = {}: expected a finite value >= 0",
+            self.beta
+        );
+        for (key, v) in [("buffer_size", self.buffer_size), ("batch_size", self.batch_size)] {
+            anyhow::ensure!((1..=1 << 20).contains(&v), "[method.{table}] {key} = {v}: expected 1 to 1048576");
+        }
+        Ok(())
+    }
+}
+
+/// The method `er`.
+#[derive(Debug, Clone)]
+pub struct Er {
+    pub cfg: ErConfig,
+}
+
+impl ContinualMethod for Er {
+    fn name(&self) -> &str {
+        "er"
+    }
+
+    fn settings(&self) -> serde_json::Value {
+        serde_json::to_value(&self.cfg).unwrap_or_default()
+    }
+
+    fn network_kind(&self) -> NetworkKind {
+        NetworkKind::Dense
+    }
+
+    fn update_hooks(&self) -> Box<dyn UpdateHooks> {
+        Box::new(ErHooks::new(self.cfg.clone()))
+    }
+}
+
+/// ER's state: the rehearsal buffers.
+#[derive(Debug, Clone)]
+pub struct ErHooks {
+    cfg: ErConfig,
+    replay: ReplayBuffers,
+    current: Option<TaskId>,
+}
+
+impl ErHooks {
+    /// Hooks with these settings and no task learned.
+    pub fn new(cfg: ErConfig) -> Self {
+        Self { cfg, replay: ReplayBuffers::default(), current: None }
+    }
+
+    /// The buffers.
+    pub fn replay(&self) -> &ReplayBuffers {
+        &self.replay
+    }
+}
+
+impl UpdateHooks for ErHooks {
+    fn on_task_start(&mut self, task: TaskId, _params: &[Param]) -> anyhow::Result<()> {
+        self.current = Some(task);
+        Ok(())
+    }
+
+    fn extra_loss(&mut self, _params: &[Param], probe: &dyn PolicyProbe) -> anyhow::Result<Option<(Tensor, Metrics)>> {
+        let Some(kl) = self.replay.clone_loss(probe, self.cfg.batch_size, self.current)? else { return Ok(None) };
+        let value = f64::from(kl.to_scalar::<f32>()?);
+        Ok(Some((kl.affine(self.cfg.beta, 0.0)?, Metrics::from([("losses/er_clone_kl".to_string(), value)]))))
+    }
+
+    fn after_step(&mut self, _params: &[Param]) -> anyhow::Result<()> {
+        self.replay.steps += 1;
+        Ok(())
+    }
+
+    fn on_task_end(&mut self, task: TaskId, _params: &[Param], sample: &dyn OutputSample) -> anyhow::Result<()> {
+        self.current = None;
+        self.replay.store(task, sample, self.cfg.buffer_size)
+    }
+
+    fn state(&self) -> anyhow::Result<BTreeMap<String, Tensor>> {
+        self.replay.state("er")
+    }
+
+    fn load_state(&mut self, state: &BTreeMap<String, Tensor>) -> anyhow::Result<()> {
+        self.replay = ReplayBuffers::from_state("er", state)?;
+        Ok(())
+    }
+}
