@@ -134,6 +134,9 @@ fn finetune_forgets_on_the_toy_sequence_the_mask_methods_do_not_and_every_other_
         assert!(f < finetune / 3.0, "{method} forgot {f}, finetune {finetune}: it protects nothing");
     }
     let json = assert_metrics_json_complete(&tmp.path().join("ewc"));
+    assert!(json["steps"][0].get("switches").is_none(), "a dense method's steps record no switches");
+    let wsn = assert_metrics_json_complete(&tmp.path().join("wsn"));
+    assert_eq!(wsn["steps"][1]["switches"]["lambda"], "per-layer", "wsn records the rules it ran with");
     assert_eq!((json["method"].as_str(), json["method_settings"]["lambda"].as_f64()), (Some("ewc"), Some(100.0)));
     assert!(json["curves"][1]["performance"].as_array().unwrap().len() == 60);
 }

@@ -60,6 +60,12 @@ pub trait ContinualMethod: Send {
         Ok(base.clone())
     }
 
+    /// The switches as they act on the networks, for the task records: as given for a masked
+    /// method, none for a dense one (nothing reads them).
+    fn switches_in_force(&self, switches: &Switches) -> Option<Switches> {
+        (self.network_kind() == NetworkKind::Masked).then(|| switches.clone())
+    }
+
     /// The method's settings as JSON (`metrics.json`); null when it has none.
     fn settings(&self) -> serde_json::Value {
         serde_json::Value::Null

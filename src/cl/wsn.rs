@@ -23,15 +23,22 @@ pub struct Wsn;
 /// Sigma of the scores' sampling noise under `wsn` (against a score spread of about 0.3).
 pub const WSN_SIGMA: f64 = 1e-6;
 
+/// The run's switches with WSN's rules: only the capacity is the run's.
+fn wsn_switches(switches: &Switches) -> Switches {
+    Switches { reinit: false, entropy: false, lambda: LambdaMode::PerLayer, private_share: 0.0, ..*switches }
+}
+
 impl ContinualMethod for Wsn {
     fn name(&self) -> &str {
         "wsn"
     }
 
+    fn switches_in_force(&self, switches: &Switches) -> Option<Switches> {
+        Some(wsn_switches(switches))
+    }
+
     fn task_mask_config(&self, base: &MaskConfig, switches: &Switches) -> anyhow::Result<MaskConfig> {
-        let wsn =
-            Switches { reinit: false, entropy: false, lambda: LambdaMode::PerLayer, private_share: 0.0, ..*switches };
-        let mut m = wsn.apply(base)?;
+        let mut m = wsn_switches(switches).apply(base)?;
         m.sigma_init = WSN_SIGMA;
         m.sigma_floor = m.sigma_floor.min(WSN_SIGMA);
         m.entropy_iterations = 0;

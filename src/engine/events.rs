@@ -22,7 +22,8 @@ pub enum Event {
         task: TaskId,
         name: String,
         iterations: usize,
-        switches: Switches,
+        /// The switches in force (none for a method without masks).
+        switches: Option<Switches>,
         related: Vec<TaskId>,
         /// A repeat of a finished task (METHOD.md 2.5).
         repeat: bool,

@@ -15,8 +15,10 @@ pub struct StepRecord {
     pub task: TaskId,
     pub name: String,
     pub iterations: usize,
-    /// The switches in force for this step.
-    pub switches: Switches,
+    /// The switches in force for this step; none for a method whose networks they do not act
+    /// on (the dense baselines).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub switches: Option<Switches>,
     /// The related tasks whose masks seeded the soft scores (after `random` drawing).
     pub related: Vec<TaskId>,
     /// A repeat of a finished task (METHOD.md 2.5): only its private parameters and biases trained.

@@ -104,7 +104,7 @@ impl Session {
     /// next one; None when the next step is exactly its run-file entry.
     pub fn chosen_settings(&self) -> Option<ChosenSettings> {
         if let Some(p) = &self.in_progress {
-            let s = &p.record.switches;
+            let s = p.record.switches.clone().unwrap_or_else(|| self.switches.clone());
             let switches = SwitchOverrides {
                 reinit: Some(s.reinit),
                 entropy: Some(s.entropy),

@@ -293,7 +293,7 @@ impl Session {
             task,
             name: spec.name.clone(),
             iterations: start.iterations,
-            switches: switches.clone(),
+            switches: self.method.switches_in_force(&switches),
             related: related.clone(),
             repeat,
         };
@@ -304,7 +304,7 @@ impl Session {
             task,
             name: spec.name,
             iterations: start.iterations,
-            switches,
+            switches: self.method.switches_in_force(&switches),
             related,
             repeat,
         });

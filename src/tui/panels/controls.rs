@@ -28,21 +28,30 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
     let in_force = app
         .live
         .as_ref()
-        .map(|l| l.record.switches.clone())
-        .or_else(|| app.opened.as_ref().and_then(|o| o.results.steps.last().map(|s| s.switches.clone())))
+        .and_then(|l| l.record.switches.clone())
+        .or_else(|| app.opened.as_ref().and_then(|o| o.results.steps.last().and_then(|s| s.switches.clone())))
         .unwrap_or_else(|| run.clone());
     let pending = next.pending(run);
     let target = next.step.as_ref().map_or("no pending step: add a task (a)".to_string(), |(step, spec)| {
         let default = app.opened.as_ref().map_or(0, |o| o.sequence.iterations);
         format!("step {step} {} ({} iterations)", spec.name, spec.iterations.unwrap_or(default))
     });
-    let mut lines = vec![
-        Line::raw(format!("for {target}")),
-        Line::styled(
-            format!("  {:<18} {:>10} {:>12}", "switch", "pending", "in force"),
-            Style::new().fg(Color::Gray).add_modifier(Modifier::UNDERLINED),
-        ),
-    ];
+    // The switches act on masked networks; a dense method's runs read none of them.
+    let dense = app.opened.as_ref().and_then(|o| {
+        let method = crate::cl::method_by_name(&o.method, &Default::default()).ok()?;
+        (method.network_kind() == crate::nn::NetworkKind::Dense).then(|| o.method.clone())
+    });
+    let mut lines = vec![Line::raw(format!("for {target}"))];
+    if let Some(method) = dense {
+        lines.push(Line::styled(
+            format!("  {method} trains a dense network: the switches below do nothing"),
+            Style::new().fg(Color::Yellow),
+        ));
+    }
+    lines.push(Line::styled(
+        format!("  {:<18} {:>10} {:>12}", "switch", "pending", "in force"),
+        Style::new().fg(Color::Gray).add_modifier(Modifier::UNDERLINED),
+    ));
     let cursor_style = |row: usize| {
         if focused && next.cursor == row {
             Style::new().add_modifier(Modifier::REVERSED)
