@@ -126,7 +126,9 @@ fn finetune_forgets_on_the_toy_sequence_the_mask_methods_do_not_and_every_other_
     let forgetting = |m: &str| toy_run(m, tmp.path()).summary.forgetting.unwrap();
     let (ours, finetune, ewc) = (forgetting("ours"), forgetting("finetune"), forgetting("ewc"));
     assert_eq!(ours, 0.0);
-    assert_eq!(forgetting("wsn"), 0.0, "wsn's reused weights are frozen too");
+    for masked in ["wsn", "packnet", "piggyback"] {
+        assert_eq!(forgetting(masked), 0.0, "{masked}: a finished task's weights are frozen");
+    }
     assert!(finetune > 0.01, "finetune forgot only {finetune}");
     assert!(ewc < finetune, "ewc forgot {ewc}, finetune {finetune}");
     for method in ["si", "rwalk", "er", "agem"] {
@@ -143,7 +145,7 @@ fn finetune_forgets_on_the_toy_sequence_the_mask_methods_do_not_and_every_other_
 
 #[test]
 fn a_dense_run_resumed_after_an_interruption_gives_the_same_metrics() {
-    for method in ["finetune", "ewc", "si", "rwalk", "wsn", "er", "agem"] {
+    for method in ["finetune", "ewc", "si", "rwalk", "wsn", "er", "agem", "packnet", "piggyback"] {
         let tmp = tempfile::tempdir().unwrap();
         let whole = toy_run(method, tmp.path());
         let cfg = tmp.path().join("run.toml");

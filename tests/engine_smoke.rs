@@ -152,3 +152,20 @@ fn every_baseline_runs_the_smoke_sequence_on_dense_networks_and_its_checkpoints_
         }
     }
 }
+
+#[test]
+fn every_mask_baseline_runs_the_smoke_sequence_and_forgets_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    for method in ["wsn", "packnet", "piggyback"] {
+        let out = tmp.path().join(method);
+        let m = run(&smoke(), &out, RunOptions { method: Some(method.into()), ..Default::default() }).unwrap();
+        assert_eq!((m.completed_steps, m.method.as_str()), (3, method));
+        assert_eq!(m.summary.forgetting, Some(0.0), "{method}");
+        let json = assert_metrics_json_complete(&out);
+        assert_eq!(
+            json["steps"][0].get("switches").is_some(),
+            method == "wsn",
+            "{method}: switches only where they act"
+        );
+    }
+}

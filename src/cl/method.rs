@@ -16,6 +16,8 @@ use super::er::{Er, ErConfig};
 use super::ewc::{Ewc, EwcConfig};
 use super::finetune::Finetune;
 use super::ours::{Ours, Switches};
+use super::packnet::{PackNet, PackNetConfig};
+use super::piggyback::{Piggyback, PiggybackConfig};
 use super::rwalk::{Rwalk, RwalkConfig};
 use super::si::{Si, SiConfig};
 use super::wsn::Wsn;
@@ -25,9 +27,9 @@ use crate::rl::{NoHooks, UpdateHooks};
 use serde::{Deserialize, Serialize};
 
 /// The implemented methods' names.
-pub const METHODS: [&str; 8] = ["ours", "wsn", "finetune", "ewc", "si", "rwalk", "er", "agem"];
+pub const METHODS: [&str; 10] = ["ours", "wsn", "packnet", "piggyback", "finetune", "ewc", "si", "rwalk", "er", "agem"];
 
-/// Every method's settings: `[method.ewc]`, `[method.si]`, `[method.rwalk]`, `[method.er]`, `[method.agem]` (`ours`' switches are `[method]`'s own keys).
+/// Every method's settings: `[method.NAME]` for ewc, si, rwalk, er, agem, packnet, piggyback (`ours`' switches are `[method]`'s own keys).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MethodSettings {
@@ -36,6 +38,8 @@ pub struct MethodSettings {
     pub rwalk: RwalkConfig,
     pub er: ErConfig,
     pub agem: ErConfig,
+    pub packnet: PackNetConfig,
+    pub piggyback: PiggybackConfig,
 }
 
 impl MethodSettings {
@@ -45,7 +49,9 @@ impl MethodSettings {
         self.si.validate()?;
         self.rwalk.validate()?;
         self.er.validate("er")?;
-        self.agem.validate("agem")
+        self.agem.validate("agem")?;
+        self.packnet.validate()?;
+        self.piggyback.validate()
     }
 }
 
@@ -55,8 +61,13 @@ pub trait ContinualMethod: Send {
     fn name(&self) -> &str;
 
     /// The mask settings the learner's networks use for the next task, from
-    /// the run's `base` settings and the switches in force for that task.
-    fn task_mask_config(&self, base: &MaskConfig, _switches: &Switches) -> anyhow::Result<MaskConfig> {
+    /// the run's `base` settings, the switches in force for that task and its budget.
+    fn task_mask_config(
+        &self,
+        base: &MaskConfig,
+        _switches: &Switches,
+        _iterations: usize,
+    ) -> anyhow::Result<MaskConfig> {
         Ok(base.clone())
     }
 
@@ -102,6 +113,8 @@ pub fn method_by_name(name: &str, settings: &MethodSettings) -> anyhow::Result<B
     match name {
         "ours" => Ok(Box::new(Ours)),
         "wsn" => Ok(Box::new(Wsn)),
+        "packnet" => Ok(Box::new(PackNet { cfg: settings.packnet.clone() })),
+        "piggyback" => Ok(Box::new(Piggyback { cfg: settings.piggyback.clone() })),
         "finetune" => Ok(Box::new(Finetune)),
         "ewc" => Ok(Box::new(Ewc { cfg: settings.ewc.clone() })),
         "si" => Ok(Box::new(Si { cfg: settings.si.clone() })),
@@ -131,7 +144,7 @@ mod tests {
         let settings = MethodSettings::default();
         for name in METHODS {
             let kind = method_by_name(name, &settings).unwrap().network_kind();
-            assert_eq!(kind == NetworkKind::Masked, ["ours", "wsn"].contains(&name), "{name}");
+            assert_eq!(kind == NetworkKind::Masked, ["ours", "wsn", "packnet", "piggyback"].contains(&name), "{name}");
         }
     }
 }

@@ -105,6 +105,8 @@ impl Switches {
             SelectionRule::Free => LambdaMode::Free,
             SelectionRule::Vacant => LambdaMode::Vacant,
             SelectionRule::PerLayer => LambdaMode::PerLayer,
+            // Set by their methods only, never a run's switches ([net] refuses them).
+            SelectionRule::PackNet | SelectionRule::Piggyback => LambdaMode::Free,
         };
         Self { reinit: m.reinit, entropy: m.entropy, lambda, capacity: m.capacity, private_share: m.private_share }
     }
@@ -181,7 +183,12 @@ impl ContinualMethod for Ours {
         "ours"
     }
 
-    fn task_mask_config(&self, base: &MaskConfig, switches: &Switches) -> anyhow::Result<MaskConfig> {
+    fn task_mask_config(
+        &self,
+        base: &MaskConfig,
+        switches: &Switches,
+        _iterations: usize,
+    ) -> anyhow::Result<MaskConfig> {
         switches.apply(base)
     }
 }

@@ -37,7 +37,12 @@ impl ContinualMethod for Wsn {
         Some(wsn_switches(switches))
     }
 
-    fn task_mask_config(&self, base: &MaskConfig, switches: &Switches) -> anyhow::Result<MaskConfig> {
+    fn task_mask_config(
+        &self,
+        base: &MaskConfig,
+        switches: &Switches,
+        _iterations: usize,
+    ) -> anyhow::Result<MaskConfig> {
         let mut m = wsn_switches(switches).apply(base)?;
         m.sigma_init = WSN_SIGMA;
         m.sigma_floor = m.sigma_floor.min(WSN_SIGMA);
@@ -55,7 +60,7 @@ mod tests {
     #[test]
     fn wsn_is_ours_with_the_per_layer_rule_and_every_plasticity_mechanism_off() {
         let switches = Switches { capacity: 0.3, ..Switches::default() };
-        let m = Wsn.task_mask_config(&MaskConfig::default(), &switches).unwrap();
+        let m = Wsn.task_mask_config(&MaskConfig::default(), &switches, 10).unwrap();
         assert_eq!(
             (m.rule, m.reinit, m.entropy, m.private_share, m.capacity, m.entropy_iterations),
             (SelectionRule::PerLayer, false, false, 0.0, 0.3, 0)

@@ -22,7 +22,7 @@ pub struct RunArgs {
     /// After each task, record one evaluation episode of every learned task into DIR/episodes/ (`mcap`: Foxglove).
     #[arg(long, value_parser = ["mcap"])]
     pub record: Option<String>,
-    /// Train with this method instead of the run file's [method] name: ours, wsn, finetune, ewc, si, rwalk, er, agem
+    /// Train with this method instead of the run file's [method] name: ours, wsn, packnet, piggyback, finetune, ewc, si, rwalk, er, agem
     /// (its settings still come from the file's [method.NAME] table). Give it again with --resume.
     #[arg(long)]
     pub method: Option<String>,

@@ -32,6 +32,20 @@ pub enum SelectionRule {
     Vacant,
     /// One top-k over the whole layer (WSN's original rule).
     PerLayer,
+    /// PackNet (set by the method `packnet`): every vacant and occupied element, the vacant
+    /// ones pruned by magnitude to `packnet_keep` at `packnet_prune_at` or the task's end.
+    #[serde(rename = "packnet")]
+    PackNet,
+    /// Piggyback (set by the method `piggyback`): the occupied elements whose real-valued
+    /// score exceeds `piggyback_threshold`; no weight trains.
+    Piggyback,
+}
+
+impl SelectionRule {
+    /// Whether the rule belongs to a mask baseline, set by its method rather than a run's [net.mask].
+    pub fn is_baseline(&self) -> bool {
+        matches!(self, Self::PackNet | Self::Piggyback)
+    }
 }
 
 /// The masked-layer settings of the method (METHOD.md 2.1 to 2.6).
@@ -79,6 +93,17 @@ pub struct MaskConfig {
     pub reinit_scale: f64,
     /// Forward-transfer bonus on related tasks' elements, in units of `score_init_std` (METHOD.md 2.6).
     pub transfer_bonus: f64,
+    /// PackNet: the share of a task's fresh (vacant) weights kept, by magnitude, when it is pruned;
+    /// the others are zeroed and stay vacant for later tasks.
+    pub packnet_keep: f64,
+    /// PackNet: the task's iteration from which its fresh weights are pruned (the rest of the task
+    /// retrains the kept ones); none prunes at the task's end.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub packnet_prune_at: Option<usize>,
+    /// Piggyback: a mask element is on where its real-valued score exceeds this.
+    pub piggyback_threshold: f64,
+    /// Piggyback: every score's value when a task starts.
+    pub piggyback_init: f64,
 }
 
 impl Default for MaskConfig {
@@ -99,6 +124,10 @@ impl Default for MaskConfig {
             reinit: true,
             reinit_scale: 1.0,
             transfer_bonus: 3.0,
+            packnet_keep: 0.5,
+            packnet_prune_at: None,
+            piggyback_threshold: 5e-3,
+            piggyback_init: 1e-2,
         }
     }
 }
@@ -127,6 +156,11 @@ impl MaskConfig {
         in_unit("private_share", self.private_share)?;
         in_unit("sigma_decay", self.sigma_decay)?;
         in_unit("reinit_scale", self.reinit_scale)?;
+        in_unit("packnet_keep", self.packnet_keep)?;
+        anyhow::ensure!(
+            self.piggyback_threshold.is_finite() && self.piggyback_init.is_finite(),
+            "net.mask.piggyback_threshold and piggyback_init must be finite"
+        );
         anyhow::ensure!(self.score_init_std > 0.0, "net.mask.score_init_std must be > 0");
         anyhow::ensure!(
             self.sigma_init >= 0.0 && self.sigma_floor >= 0.0,
@@ -242,6 +276,11 @@ impl NetConfig {
         self.actor.validate("actor")?;
         self.critic.validate("critic")?;
         self.cenet.validate("cenet")?;
+        anyhow::ensure!(
+            !self.mask.rule.is_baseline(),
+            "net.mask.rule = {:?}: the methods packnet and piggyback set it themselves; choose them with [method] name",
+            self.mask.rule
+        );
         self.mask.validate()
     }
 }

@@ -136,7 +136,7 @@ impl RunConfig {
                     Some(other) => anyhow::bail!("[method] name = {other}: expected a string"),
                 };
                 let mut settings = toml::Table::new();
-                for key in ["ewc", "si", "rwalk", "er", "agem"] {
+                for key in ["ewc", "si", "rwalk", "er", "agem", "packnet", "piggyback"] {
                     if let Some(v) = t.remove(key) {
                         settings.insert(key.into(), v);
                     }

@@ -32,6 +32,7 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal, Uniform};
 use std::collections::BTreeMap;
 
+mod baselines;
 mod iteration;
 
 /// The task being trained and its per-iteration tensors.
@@ -257,7 +258,9 @@ impl MaskedLinear {
             None => self.related_bias(related)?,
         };
         let bias = var_from(bias, &[self.out_dim])?;
-        if !repeat {
+        if !repeat && self.cfg.rule == SelectionRule::Piggyback {
+            self.piggyback_start_scores()?;
+        } else if !repeat {
             set_var(&self.log_sigma, vec![(self.cfg.sigma_init as f32).ln()])?;
             let mut mu = var_values(&self.score_mean)?;
             let delta = (self.cfg.transfer_bonus * self.cfg.score_init_std) as f32;
@@ -371,7 +374,11 @@ impl MaskedLinear {
         }
         let (out_dim, in_dim, n) = (self.out_dim, self.in_dim, self.out_dim * self.in_dim);
         let mu = var_values(&self.score_mean)?;
-        let selected = select_mask(&mu, &self.states, out_dim, in_dim, t.task, &self.params());
+        let selected = if self.cfg.rule.is_baseline() {
+            self.baseline_final_mask()?
+        } else {
+            select_mask(&mu, &self.states, out_dim, in_dim, t.task, &self.params())
+        };
         let mut fresh: Vec<usize> = (0..n).filter(|&i| selected[i] && self.states[i] == ElementState::Vacant).collect();
         fresh.sort_by(|&a, &b| mu[b].total_cmp(&mu[a]).then(a.cmp(&b)));
         let n_private = ((self.cfg.private_share * n as f64).round() as usize).min(fresh.len());

@@ -88,6 +88,13 @@ pub fn select_mask(
             }
             SelectionRule::Vacant => top_k(scores, vacant, k),
             SelectionRule::PerLayer => unreachable!("handled above"),
+            // PackNet and Piggyback choose their masks in `nn/masked/baselines.rs`; as a rule
+            // here they take every selectable element.
+            SelectionRule::PackNet | SelectionRule::Piggyback => {
+                let mut all = vacant;
+                all.extend(others);
+                all
+            }
         };
         for i in chosen {
             mask[i] = true;

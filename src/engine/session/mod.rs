@@ -270,7 +270,7 @@ impl Session {
         let spec = self.sequence.tasks[step].clone();
         let task = self.results.tasks.iter().position(|t| *t == spec.name).expect("distinct tasks cover the sequence");
         let switches = self.switches.with(&spec.switches.merged(&self.queued));
-        let mask = self.method.task_mask_config(&self.base_mask, &switches)?;
+        let mask = self.method.task_mask_config(&self.base_mask, &switches, self.sequence.iterations_of(step))?;
         let repeat = self.finished[task];
         let seed = derive_seed(self.seed, Stream::SequenceStep(step));
         let (related_names, init) = self.queued_transfer.take().unwrap_or((spec.related.clone(), spec.init));

@@ -58,6 +58,9 @@ impl MaskedLinear {
             t.noise = None;
             return Ok(());
         }
+        if self.cfg.rule.is_baseline() {
+            return self.begin_baseline_iteration(iteration);
+        }
         let mut log_sigma = var_values(&self.log_sigma)?[0];
         if iteration >= self.cfg.entropy_iterations {
             log_sigma += (self.cfg.sigma_decay as f32).ln();

@@ -1,0 +1,85 @@
+//! `piggyback`: Piggyback (Mallya, Davis & Lazebnik, ECCV 2018) on the masked
+//! networks (METHOD.md 3; the mechanics are `nn/masked/baselines.rs`). The
+//! weights are the base policy's and never train; each task learns one
+//! real-valued score per base weight, initialised at `init` (1e-2), and uses
+//! the weights whose score exceeds `threshold` (5e-3), trained through the
+//! straight-through estimator. Each task keeps its own bias (as every task of
+//! `ours` does). Recall is bit-identical after any later task; a task can only
+//! switch base weights off, which is the loss of plasticity the paper reports.
+//!
+//! Settings: `[method.piggyback]` `threshold`, `init`.
+
+use super::method::ContinualMethod;
+use super::ours::Switches;
+use crate::config::net::{MaskConfig, SelectionRule};
+use serde::{Deserialize, Serialize};
+
+/// `[method.piggyback]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PiggybackConfig {
+    /// A weight is used where its score exceeds this.
+    pub threshold: f64,
+    /// Every score when a task starts.
+    pub init: f64,
+}
+
+impl Default for PiggybackConfig {
+    fn default() -> Self {
+        Self { threshold: 5e-3, init: 1e-2 }
+    }
+}
+
+impl PiggybackConfig {
+    /// Errors name the key.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            self.threshold.is_finite() && self.init.is_finite(),
+            "[method.piggyback] threshold = {}, init = {}: expected finite values",
+            self.threshold,
+            self.init
+        );
+        Ok(())
+    }
+}
+
+/// The method `piggyback`.
+#[derive(Debug, Clone)]
+pub struct Piggyback {
+    pub cfg: PiggybackConfig,
+}
+
+impl ContinualMethod for Piggyback {
+    fn name(&self) -> &str {
+        "piggyback"
+    }
+
+    fn settings(&self) -> serde_json::Value {
+        serde_json::to_value(&self.cfg).unwrap_or_default()
+    }
+
+    fn switches_in_force(&self, _switches: &Switches) -> Option<Switches> {
+        None
+    }
+
+    fn task_mask_config(
+        &self,
+        base: &MaskConfig,
+        _switches: &Switches,
+        _iterations: usize,
+    ) -> anyhow::Result<MaskConfig> {
+        let m = MaskConfig {
+            rule: SelectionRule::Piggyback,
+            private_share: 0.0,
+            reinit: false,
+            entropy: false,
+            entropy_iterations: 0,
+            transfer_bonus: 0.0,
+            piggyback_threshold: self.cfg.threshold,
+            piggyback_init: self.cfg.init,
+            ..base.clone()
+        };
+        m.validate()?;
+        Ok(m)
+    }
+}
