@@ -49,7 +49,6 @@ impl ContinualMethod for Agem {
 pub struct AgemHooks {
     cfg: ErConfig,
     replay: ReplayBuffers,
-    current: Option<TaskId>,
     /// Optimiser steps whose gradient was projected (this process).
     pub projected: usize,
 }
@@ -57,7 +56,7 @@ pub struct AgemHooks {
 impl AgemHooks {
     /// Hooks with these settings and no task learned.
     pub fn new(cfg: ErConfig) -> Self {
-        Self { cfg, replay: ReplayBuffers::default(), current: None, projected: 0 }
+        Self { cfg, replay: ReplayBuffers::default(), projected: 0 }
     }
 }
 
@@ -98,7 +97,7 @@ pub fn project(params: &[Param], grads: &mut GradStore, reference: &GradStore) -
 
 impl UpdateHooks for AgemHooks {
     fn on_task_start(&mut self, task: TaskId, _params: &[Param]) -> anyhow::Result<()> {
-        self.current = Some(task);
+        self.replay.start(task);
         Ok(())
     }
 
@@ -108,7 +107,7 @@ impl UpdateHooks for AgemHooks {
         grads: &mut GradStore,
         probe: &dyn PolicyProbe,
     ) -> anyhow::Result<()> {
-        let Some(loss) = self.replay.clone_loss(probe, self.cfg.batch_size, self.current)? else { return Ok(()) };
+        let Some(loss) = self.replay.batch_loss(probe, self.cfg.batch_size)? else { return Ok(()) };
         if project(params, grads, &loss.backward()?)? {
             self.projected += 1;
         }
@@ -116,13 +115,12 @@ impl UpdateHooks for AgemHooks {
     }
 
     fn after_step(&mut self, _params: &[Param]) -> anyhow::Result<()> {
-        self.replay.steps += 1;
+        self.replay.stepped();
         Ok(())
     }
 
     fn on_task_end(&mut self, task: TaskId, _params: &[Param], sample: &dyn OutputSample) -> anyhow::Result<()> {
-        self.current = None;
-        self.replay.store(task, sample, self.cfg.buffer_size)
+        self.replay.end(task, sample, self.cfg.buffer_size)
     }
 
     fn state(&self) -> anyhow::Result<BTreeMap<String, Tensor>> {

@@ -81,13 +81,12 @@ impl ContinualMethod for Er {
 pub struct ErHooks {
     cfg: ErConfig,
     replay: ReplayBuffers,
-    current: Option<TaskId>,
 }
 
 impl ErHooks {
     /// Hooks with these settings and no task learned.
     pub fn new(cfg: ErConfig) -> Self {
-        Self { cfg, replay: ReplayBuffers::default(), current: None }
+        Self { cfg, replay: ReplayBuffers::default() }
     }
 
     /// The buffers.
@@ -98,24 +97,23 @@ impl ErHooks {
 
 impl UpdateHooks for ErHooks {
     fn on_task_start(&mut self, task: TaskId, _params: &[Param]) -> anyhow::Result<()> {
-        self.current = Some(task);
+        self.replay.start(task);
         Ok(())
     }
 
     fn extra_loss(&mut self, _params: &[Param], probe: &dyn PolicyProbe) -> anyhow::Result<Option<(Tensor, Metrics)>> {
-        let Some(kl) = self.replay.clone_loss(probe, self.cfg.batch_size, self.current)? else { return Ok(None) };
+        let Some(kl) = self.replay.batch_loss(probe, self.cfg.batch_size)? else { return Ok(None) };
         let value = f64::from(kl.to_scalar::<f32>()?);
         Ok(Some((kl.affine(self.cfg.beta, 0.0)?, Metrics::from([("losses/er_clone_kl".to_string(), value)]))))
     }
 
     fn after_step(&mut self, _params: &[Param]) -> anyhow::Result<()> {
-        self.replay.steps += 1;
+        self.replay.stepped();
         Ok(())
     }
 
     fn on_task_end(&mut self, task: TaskId, _params: &[Param], sample: &dyn OutputSample) -> anyhow::Result<()> {
-        self.current = None;
-        self.replay.store(task, sample, self.cfg.buffer_size)
+        self.replay.end(task, sample, self.cfg.buffer_size)
     }
 
     fn state(&self) -> anyhow::Result<BTreeMap<String, Tensor>> {

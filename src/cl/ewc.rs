@@ -130,9 +130,7 @@ pub fn diagonal_fisher(
 
 impl UpdateHooks for EwcHooks {
     fn extra_loss(&mut self, params: &[Param], _probe: &dyn PolicyProbe) -> anyhow::Result<Option<(Tensor, Metrics)>> {
-        let Some(loss) = self.penalty.loss(params, self.cfg.lambda)? else { return Ok(None) };
-        let value = f64::from(loss.to_scalar::<f32>()?);
-        Ok(Some((loss, Metrics::from([("losses/ewc_penalty".to_string(), value)]))))
+        self.penalty.extra_loss(params, self.cfg.lambda, "losses/ewc_penalty")
     }
 
     fn on_task_end(&mut self, _task: TaskId, params: &[Param], sample: &dyn OutputSample) -> anyhow::Result<()> {

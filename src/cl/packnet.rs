@@ -51,6 +51,20 @@ impl PackNetConfig {
     }
 }
 
+/// `base` with `rule` and none of `ours`' plasticity mechanisms (no private elements,
+/// re-initialisation, entropy or transfer bonus): the mask baselines' common settings.
+pub fn without_plasticity_mechanisms(base: &MaskConfig, rule: SelectionRule) -> MaskConfig {
+    MaskConfig {
+        rule,
+        private_share: 0.0,
+        reinit: false,
+        entropy: false,
+        entropy_iterations: 0,
+        transfer_bonus: 0.0,
+        ..base.clone()
+    }
+}
+
 /// The method `packnet`.
 #[derive(Debug, Clone)]
 pub struct PackNet {
@@ -77,16 +91,10 @@ impl ContinualMethod for PackNet {
         iterations: usize,
     ) -> anyhow::Result<MaskConfig> {
         let m = MaskConfig {
-            rule: SelectionRule::PackNet,
             capacity: 1.0,
-            private_share: 0.0,
-            reinit: false,
-            entropy: false,
-            entropy_iterations: 0,
-            transfer_bonus: 0.0,
             packnet_keep: self.cfg.keep,
             packnet_prune_at: Some(self.cfg.prune_at(iterations)),
-            ..base.clone()
+            ..without_plasticity_mechanisms(base, SelectionRule::PackNet)
         };
         m.validate()?;
         Ok(m)

@@ -11,6 +11,7 @@
 
 use super::method::ContinualMethod;
 use super::ours::Switches;
+use super::packnet::without_plasticity_mechanisms;
 use crate::config::net::{MaskConfig, SelectionRule};
 use serde::{Deserialize, Serialize};
 
@@ -69,15 +70,9 @@ impl ContinualMethod for Piggyback {
         _iterations: usize,
     ) -> anyhow::Result<MaskConfig> {
         let m = MaskConfig {
-            rule: SelectionRule::Piggyback,
-            private_share: 0.0,
-            reinit: false,
-            entropy: false,
-            entropy_iterations: 0,
-            transfer_bonus: 0.0,
             piggyback_threshold: self.cfg.threshold,
             piggyback_init: self.cfg.init,
-            ..base.clone()
+            ..without_plasticity_mechanisms(base, SelectionRule::Piggyback)
         };
         m.validate()?;
         Ok(m)

@@ -106,6 +106,18 @@ impl QuadraticPenalty {
         })
     }
 
+    /// [`Self::loss`] with its value as the metric `name` (an [`crate::rl::UpdateHooks::extra_loss`]).
+    pub fn extra_loss(
+        &self,
+        params: &[Param],
+        weight: f64,
+        name: &str,
+    ) -> anyhow::Result<Option<(Tensor, crate::rl::Metrics)>> {
+        let Some(loss) = self.loss(params, weight)? else { return Ok(None) };
+        let value = f64::from(loss.to_scalar::<f32>()?);
+        Ok(Some((loss, crate::rl::Metrics::from([(name.to_string(), value)]))))
+    }
+
     /// The terms as named tensors: "{prefix}.{param}.importance" and ".anchor".
     pub fn state(&self, prefix: &str) -> BTreeMap<String, Tensor> {
         let mut out = BTreeMap::new();

@@ -39,14 +39,37 @@ impl TaskReplay {
     }
 }
 
-/// Every finished task's rehearsal data and the step count that seeds the batches.
+/// Every finished task's rehearsal data, the step count that seeds the batches, and the
+/// task in training (whose own buffer, when it repeats, is not replayed).
 #[derive(Debug, Clone, Default)]
 pub struct ReplayBuffers {
     pub tasks: Vec<TaskReplay>,
     pub steps: usize,
+    pub current: Option<TaskId>,
 }
 
 impl ReplayBuffers {
+    /// A task starts training.
+    pub fn start(&mut self, task: TaskId) {
+        self.current = Some(task);
+    }
+
+    /// An optimiser step was taken (the next batch is another).
+    pub fn stepped(&mut self) {
+        self.steps += 1;
+    }
+
+    /// The task in training ends: up to `size` rows of `sample` are kept for it.
+    pub fn end(&mut self, task: TaskId, sample: &dyn OutputSample, size: usize) -> anyhow::Result<()> {
+        self.current = None;
+        self.store(task, sample, size)
+    }
+
+    /// [`Self::clone_loss`] on a batch of `batch` rows, leaving out the task in training.
+    pub fn batch_loss(&self, probe: &dyn PolicyProbe, batch: usize) -> anyhow::Result<Option<Tensor>> {
+        self.clone_loss(probe, batch, self.current)
+    }
+
     /// Keeps up to `size` rows of `sample`, evenly spaced, for `task` (replacing an older buffer of it).
     pub fn store(&mut self, task: TaskId, sample: &dyn OutputSample, size: usize) -> anyhow::Result<()> {
         let n = size.min(sample.len());
@@ -153,6 +176,6 @@ impl ReplayBuffers {
             None => 0,
         };
         tasks.sort_by_key(|r| r.task);
-        Ok(Self { tasks, steps })
+        Ok(Self { tasks, steps, current: None })
     }
 }

@@ -144,9 +144,7 @@ impl UpdateHooks for SiHooks {
     }
 
     fn extra_loss(&mut self, params: &[Param], _probe: &dyn PolicyProbe) -> anyhow::Result<Option<(Tensor, Metrics)>> {
-        let Some(loss) = self.penalty.loss(params, self.cfg.c)? else { return Ok(None) };
-        let value = f64::from(loss.to_scalar::<f32>()?);
-        Ok(Some((loss, Metrics::from([("losses/si_penalty".to_string(), value)]))))
+        self.penalty.extra_loss(params, self.cfg.c, "losses/si_penalty")
     }
 
     fn after_step(&mut self, params: &[Param]) -> anyhow::Result<()> {

@@ -15,7 +15,7 @@
 //! ended. Parameter names: "{name}.l{i}.weight" / ".bias" for the trunk,
 //! "{name}.head.weight" / ".bias" for the head in training.
 
-use super::fused::fused_mlp;
+use super::fused::fused_mlp_checked;
 use super::mlp::FrozenWeights;
 use super::state::TaskId;
 use super::Param;
@@ -240,14 +240,7 @@ impl DenseMlp {
     }
 
     fn run(&self, x: &Tensor, theta: &Tensor, track: bool) -> anyhow::Result<Tensor> {
-        let dims = x.dims();
-        anyhow::ensure!(
-            dims.len() == 2 && dims[1] == self.sizes[0],
-            "{}: input shape {dims:?}, expected (batch, {})",
-            self.name,
-            self.sizes[0]
-        );
-        Ok(fused_mlp(&self.sizes, self.activation, x, theta, track)?)
+        fused_mlp_checked(&self.name, &self.sizes, self.activation, x, theta, track)
     }
 
     /// Training forward with the task in progress' head, differentiable in trunk and head.

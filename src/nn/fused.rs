@@ -211,6 +211,24 @@ impl FusedMlp {
     }
 }
 
+/// [`fused_mlp`] after checking that `x` is (batch, sizes[0]); the error names `network`.
+pub(crate) fn fused_mlp_checked(
+    network: &str,
+    sizes: &[usize],
+    activation: Activation,
+    x: &Tensor,
+    theta: &Tensor,
+    track: bool,
+) -> anyhow::Result<Tensor> {
+    let dims = x.dims();
+    anyhow::ensure!(
+        dims.len() == 2 && dims[1] == sizes[0],
+        "{network}: input shape {dims:?}, expected (batch, {})",
+        sizes[0]
+    );
+    Ok(fused_mlp(sizes, activation, x, theta, track)?)
+}
+
 /// Runs the MLP: differentiable in x and theta when `track` is true.
 pub fn fused_mlp(
     sizes: &[usize],

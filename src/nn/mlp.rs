@@ -6,7 +6,7 @@
 //! Shapes: x (batch, sizes[0]) -> (batch, sizes[last]).
 
 use super::activation::activate;
-use super::fused::fused_mlp;
+use super::fused::fused_mlp_checked;
 use super::masked::MaskedLinear;
 use super::state::TaskId;
 use super::Param;
@@ -204,14 +204,7 @@ impl MaskedMlp {
 
     /// Runs the fused op on `theta` (see [`Self::theta`]).
     fn run_theta(&self, x: &Tensor, theta: &Tensor, track: bool) -> anyhow::Result<Tensor> {
-        let dims = x.dims();
-        anyhow::ensure!(
-            dims.len() == 2 && dims[1] == self.sizes[0],
-            "{}: input shape {dims:?}, expected (batch, {})",
-            self.name,
-            self.sizes[0]
-        );
-        Ok(fused_mlp(&self.sizes, self.activation, x, theta, track)?)
+        fused_mlp_checked(&self.name, &self.sizes, self.activation, x, theta, track)
     }
 
     fn run(&self, x: &Tensor, weights: Vec<(Tensor, Tensor)>, track: bool) -> anyhow::Result<Tensor> {
