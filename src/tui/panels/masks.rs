@@ -150,6 +150,29 @@ fn overlap_line(app: &App, network: &str, task: &str) -> Line<'static> {
     Line::raw(format!("shared with: {}", if parts.is_empty() { "-".to_string() } else { parts.join("  ") }))
 }
 
+/// A dense network's layers (the baselines have no masks): the trunk every task shares and
+/// one head per task, from the mask report; None when the networks are masked.
+fn dense_summary(app: &App) -> Option<Vec<Line<'static>>> {
+    let report = app.report.as_ref()?;
+    let is_dense = |n: &crate::nn::NetworkMasks| n.layers.last().is_some_and(|l| l.name.ends_with(".head"));
+    if report.networks.is_empty() || !report.networks.iter().all(is_dense) {
+        return None;
+    }
+    let mut lines = vec![Line::raw("a dense network: no masks, every task trains the shared trunk"), Line::raw("")];
+    for n in &report.networks {
+        for l in &n.layers {
+            let [out, inp] = l.shape;
+            let who = if l.name.ends_with(".head") {
+                format!("one per task ({} heads)", l.per_task.len())
+            } else {
+                format!("shared by {} tasks", l.per_task.len())
+            };
+            lines.push(Line::raw(format!("  {:<22} {out:>4} x {inp:<4} {who}", l.name)));
+        }
+    }
+    Some(lines)
+}
+
 pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
     let task = app.selected().map(|r| r.task).unwrap_or_default();
     let views: Vec<&LayerView> = match &app.views {
@@ -169,12 +192,19 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
         Some((_, Some(it), _)) => format!(" · live, iteration {it}"),
         _ => String::new(),
     };
-    let title =
-        format!("Masks: {task} · {network} ({}/{}){live}", app.network % networks.len().max(1) + 1, networks.len());
+    let title = if networks.is_empty() {
+        format!("Masks: {task}")
+    } else {
+        format!("Masks: {task} · {network} ({}/{}){live}", app.network % networks.len().max(1) + 1, networks.len())
+    };
     let inner = block(&title, focused).inner(area);
     f.render_widget(block(&title, focused), area);
     if views.is_empty() {
-        f.render_widget(Paragraph::new("waiting for the element views ..."), inner);
+        let text = match dense_summary(app) {
+            Some(lines) => Paragraph::new(lines),
+            None => Paragraph::new("waiting for the element views ..."),
+        };
+        f.render_widget(text, inner);
         return;
     }
     let layers: Vec<&&LayerView> = views.iter().filter(|v| v.network == network).collect();
