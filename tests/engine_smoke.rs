@@ -74,6 +74,14 @@ fn a_sequence_starts_from_a_base_policy_and_keeps_its_task() {
         m.evaluations.iter().map(|row| row.iter().find(|e| e.report.task == "none").unwrap().clone()).collect();
     assert_eq!(base_evals.len(), 2);
     assert_eq!(base_evals[0], base_evals[1], "the base task is recalled bit for bit");
+
+    // Under other acting settings the recalled weights would act differently: refused, naming each.
+    let text = std::fs::read_to_string(&run_file).unwrap().replace("episode_s = 2.0\n", "episode_s = 2.0\nkp = 31.0\n");
+    let other = tmp.path().join("other-gains.toml");
+    std::fs::write(&other, text).unwrap();
+    let err = format!("{:#}", run(&other, &tmp.path().join("refused"), RunOptions::default()).unwrap_err());
+    assert!(err.contains("env.kp") && err.contains("31") && err.contains("policy"), "{err}");
+    assert!(!tmp.path().join("refused/metrics.json").exists(), "nothing was written");
 }
 
 #[test]

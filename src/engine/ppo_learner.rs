@@ -305,6 +305,15 @@ impl Learner for PpoTaskLearner {
         let policy = checkpoint::load_policy(dir)?;
         let info: PolicyInfo = serde_json::from_value(policy.config.clone())
             .with_context(|| format!("{}: the manifest's config is not a quadcl training config", dir.display()))?;
+        // The policy's weights recall exactly, but only under the settings it learned to act with.
+        let differences = crate::rl::acting_settings_differences(&info.config, &self.config);
+        anyhow::ensure!(
+            differences.is_empty(),
+            "{}: the policy was trained to act under other settings than this run's: {}; give the run the \
+             policy's values",
+            dir.display(),
+            differences.join(", ")
+        );
         let clip = self.config.ppo.obs_clip as f32;
         let mut states = BTreeMap::new();
         for t in 0..policy.tasks.len() {

@@ -4,6 +4,7 @@
 //! | file | what |
 //! | --- | --- |
 //! | `ppo` | the PPO learner: rollout collection and the update, top to bottom |
+//! | `acting_settings` | the settings a policy acts under, which a base policy must share with its sequence |
 //! | `agent` | actor, critic, CENet encoder/decoder, policy std, observation statistics |
 //! | `rollout` | the rollout buffer of one iteration, GAE with time-out bootstrapping |
 //! | `update_hooks` | [`UpdateHooks`]: how a continual-learning method reaches into the update |
@@ -23,6 +24,7 @@
 //! | `sim_env` | the simulated quadruped (`sim::VecEnv`) as a [`TrainEnv`] |
 
 mod acting;
+mod acting_settings;
 mod agent;
 mod cenet_loss;
 mod env;
@@ -45,6 +47,7 @@ mod trainer;
 mod update_hooks;
 
 pub use acting::{ActOutput, ActingWeights};
+pub use acting_settings::{acting_settings_differences, ACTING_SETTINGS};
 pub use agent::Agent;
 pub use env::{EnvDims, EpisodeSummary, TrainEnv, VecStep};
 pub use evaluate::{evaluate, EvalReport};
