@@ -31,7 +31,14 @@ pub enum Event {
     /// One training iteration finished.
     Iteration { step: usize, task: TaskId, iteration: usize, iterations: usize, metrics: Metrics },
     /// The training step ended (masks chosen, per-task state frozen).
-    TaskEnded { step: usize, task: TaskId, name: String },
+    TaskEnded {
+        step: usize,
+        task: TaskId,
+        name: String,
+        /// How its selection used the masked networks (none for a dense method).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        capacity: Option<super::results::StepCapacity>,
+    },
     /// A finished task was evaluated after training step `after_step`.
     Evaluated { after_step: usize, evaluation: Evaluation },
     /// Mask statistics after training step `after_step`.

@@ -25,6 +25,43 @@ pub struct StepRecord {
     /// (`fine_tune` in runs written before the rename.)
     #[serde(alias = "fine_tune")]
     pub repeat: bool,
+    /// How the task's selection used the masked networks (none for a dense method, and in runs
+    /// written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub capacity: Option<StepCapacity>,
+}
+
+/// How a masked task's selection used the networks, from the mask statistics right after
+/// it ended (METHOD.md 2.1): what a sequence has left for the tasks after it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StepCapacity {
+    /// Vacant elements over all elements of every masked layer, after the step.
+    pub vacant_share_after: f64,
+    /// The share of the task's selected elements that earlier tasks had occupied (reuse).
+    pub from_occupied_share: f64,
+    /// Layers with no vacant element left after the step: later tasks can only reuse there.
+    pub exhausted_layers: Vec<String>,
+}
+
+impl StepCapacity {
+    /// The figures of task `task` in `report`; None when the report has no mask of it.
+    pub fn from_report(report: &crate::nn::MaskReport, task: &str) -> Option<Self> {
+        let layers: Vec<&crate::nn::LayerMasks> = report.networks.iter().flat_map(|n| &n.layers).collect();
+        let (mut vacant, mut total, mut selected, mut reused) = (0usize, 0usize, 0usize, 0usize);
+        for l in &layers {
+            vacant += l.vacant;
+            total += l.shape[0] * l.shape[1];
+            let m = l.per_task.iter().find(|m| m.task == task)?;
+            selected += m.selected;
+            reused += m.from_occupied;
+        }
+        let round = |v: f64| (v * 1e6).round() / 1e6;
+        Some(Self {
+            vacant_share_after: round(vacant as f64 / total.max(1) as f64),
+            from_occupied_share: round(reused as f64 / selected.max(1) as f64),
+            exhausted_layers: layers.iter().filter(|l| l.vacant == 0).map(|l| l.name.clone()).collect(),
+        })
+    }
 }
 
 /// A training step's curves, one value per iteration.

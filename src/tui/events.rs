@@ -47,7 +47,16 @@ impl App {
     fn on_event(&mut self, e: Event) {
         match e {
             Event::TaskStarted { step, task, name, iterations, switches, related, repeat } => {
-                let record = StepRecord { step, task, name: name.clone(), iterations, switches, related, repeat };
+                let record = StepRecord {
+                    step,
+                    task,
+                    name: name.clone(),
+                    iterations,
+                    switches,
+                    related,
+                    repeat,
+                    capacity: None,
+                };
                 let curve = TaskCurve { step, task, name, ..Default::default() };
                 self.live =
                     Some(Live { record, iteration: 0, curve, arrivals: Vec::new(), sps: None, physics_resets: 0 });

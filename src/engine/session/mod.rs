@@ -296,6 +296,7 @@ impl Session {
             switches: self.method.switches_in_force(&switches),
             related: related.clone(),
             repeat,
+            capacity: None,
         };
         let curve = TaskCurve { step, task, name: spec.name.clone(), ..Default::default() };
         self.in_progress = Some(InProgress { record, iteration: 0, curve });
@@ -345,12 +346,17 @@ impl Session {
     }
 
     fn finish_task(&mut self) -> anyhow::Result<()> {
-        let p = self.in_progress.take().expect("a task is in progress");
+        let mut p = self.in_progress.take().expect("a task is in progress");
         self.learner.end_task()?;
         let (step, task) = (p.record.step, p.record.task);
         self.finished[task] = true;
         self.method.on_task_end(task, &p.record.name)?;
-        self.emit(Event::TaskEnded { step, task, name: p.record.name.clone() });
+        let report = self.learner.mask_report(&self.results.tasks);
+        if self.method.network_kind() == crate::nn::NetworkKind::Masked {
+            p.record.capacity = super::results::StepCapacity::from_report(&report, &p.record.name);
+        }
+        let capacity = p.record.capacity.clone();
+        self.emit(Event::TaskEnded { step, task, name: p.record.name.clone(), capacity });
         let mut row = Vec::new();
         let mut evaluations = Vec::new();
         let learned: Vec<TaskId> = (0..self.finished.len()).filter(|&t| self.finished[t]).collect();
@@ -364,7 +370,6 @@ impl Session {
         self.results.evaluations.push(evaluations);
         self.results.curves.push(p.curve);
         self.results.steps.push(p.record);
-        let report = self.learner.mask_report(&self.results.tasks);
         self.emit(Event::MaskStats { after_step: step, report });
         let reference = |name: &str| self.reference_curve(name);
         let (eval_matrix, summary) = (self.results.eval_matrix.clone(), self.results.summary(&reference));
