@@ -48,6 +48,17 @@ impl SelectionRule {
     }
 }
 
+/// Where a new task's per-task bias starts (METHOD.md 2.6; the paper does not say).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum BiasStart {
+    /// The mean of the related tasks' biases (zero without any, e.g. in `scratch` mode).
+    #[default]
+    Related,
+    /// Zero for every task, whatever its related tasks: every transfer mode starts alike.
+    Zero,
+}
+
 /// The masked-layer settings of the method (METHOD.md 2.1 to 2.6).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -104,6 +115,12 @@ pub struct MaskConfig {
     pub piggyback_threshold: f64,
     /// Piggyback: every score's value when a task starts.
     pub piggyback_init: f64,
+    /// Whether the soft scores of occupied elements train too (one reading of METHOD.md 2.2's
+    /// straight-through gradient); off: only vacant elements' scores move, occupied ones keep
+    /// the ranking the task started with (its transfer bonus included).
+    pub score_grad_occupied: bool,
+    /// Where a new task's bias starts: `related` (the related tasks' mean) or `zero`.
+    pub bias_start: BiasStart,
 }
 
 impl Default for MaskConfig {
@@ -128,6 +145,8 @@ impl Default for MaskConfig {
             packnet_prune_at: None,
             piggyback_threshold: 5e-3,
             piggyback_init: 1e-2,
+            score_grad_occupied: true,
+            bias_start: BiasStart::Related,
         }
     }
 }

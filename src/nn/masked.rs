@@ -25,7 +25,7 @@ use super::masked_weight::masked_weight;
 use super::select::{select_mask, SelectionParams};
 use super::state::{ElementState, TaskId};
 use super::Param;
-use crate::config::net::{MaskConfig, SelectionRule};
+use crate::config::net::{BiasStart, MaskConfig, SelectionRule};
 use anyhow::Context;
 use candle_core::{DType, Device, Tensor, Var};
 use rand::Rng;
@@ -178,6 +178,11 @@ impl MaskedLinear {
         var_values(&self.weight)
     }
 
+    /// The soft-score means mu, row-major (out * in).
+    pub fn score_values(&self) -> anyhow::Result<Vec<f32>> {
+        var_values(&self.score_mean)
+    }
+
     /// Scales the initial weights and the re-initialisation range by
     /// `factor`, e.g. for a policy head that starts near zero (CleanRL's
     /// actor-mean init). Only on a fresh layer: no task started or ended.
@@ -253,9 +258,10 @@ impl MaskedLinear {
             self.training.as_ref().map_or(0, |t| t.task)
         );
         let repeat = self.masks.contains_key(&task);
-        let bias = match self.biases.get(&task) {
-            Some(b) => b.clone(),
-            None => self.related_bias(related)?,
+        let bias = match (self.biases.get(&task), self.cfg.bias_start) {
+            (Some(b), _) => b.clone(),
+            (None, BiasStart::Related) => self.related_bias(related)?,
+            (None, BiasStart::Zero) => vec![0.0; self.out_dim],
         };
         let bias = var_from(bias, &[self.out_dim])?;
         if !repeat && self.cfg.rule == SelectionRule::Piggyback {

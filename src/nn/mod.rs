@@ -30,7 +30,7 @@ mod select;
 mod state;
 mod stats;
 
-pub use crate::config::net::{Activation, MaskConfig, NetworkKind, SelectionRule};
+pub use crate::config::net::{Activation, BiasStart, MaskConfig, NetworkKind, SelectionRule};
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};
 pub use dense::{DenseLayer, DenseMlp};

@@ -79,7 +79,9 @@ impl MaskedLinear {
         t.noise = Some(Tensor::from_vec(eps, (out_dim, in_dim), &Device::Cpu)?);
         let vacant = self.states.iter().map(|s| *s == ElementState::Vacant);
         t.weight_update = Some(mask_tensor(selected.iter().zip(vacant).map(|(s, v)| *s && v), out_dim, in_dim)?);
-        t.score_update = Some(mask_tensor(self.states.iter().map(|s| s.selectable_by(t.task)), out_dim, in_dim)?);
+        let occupied_too = self.cfg.score_grad_occupied;
+        let scores_move = |s: &ElementState| s.selectable_by(t.task) && (occupied_too || *s == ElementState::Vacant);
+        t.score_update = Some(mask_tensor(self.states.iter().map(scores_move), out_dim, in_dim)?);
         Ok(())
     }
 

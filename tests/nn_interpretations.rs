@@ -1,0 +1,84 @@
+//! The switches for the method's unlabelled interpretations (issue 13 item 1),
+//! on real masked layers: with `score_grad_occupied` off only vacant elements'
+//! scores train; with `bias_start = "zero"` a task with related tasks starts
+//! from a zero bias, as a task without any does.
+
+use candle_core::{Device, Tensor};
+use quadcl::nn::{Activation, BiasStart, ElementState, MaskConfig, MaskedAdam, MaskedMlp};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+fn input(seed: u64) -> Tensor {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let v: Vec<f32> = (0..8 * 6).map(|_| rand::Rng::gen_range(&mut rng, -1.0f32..1.0)).collect();
+    Tensor::from_vec(v, (8, 6), &Device::Cpu).unwrap()
+}
+
+/// Starts `task` (related to `related`) under `cfg`.
+fn start(net: &mut MaskedMlp, task: usize, related: &[usize], cfg: &MaskConfig) {
+    net.set_mask_config(cfg).unwrap();
+    net.begin_task(task, related).unwrap();
+}
+
+/// `iterations` steps of a squared-output loss on the task in progress.
+fn steps(net: &mut MaskedMlp, task: usize, iterations: usize) {
+    let mut rng = ChaCha8Rng::seed_from_u64(task as u64);
+    let mut adam = MaskedAdam::new(Default::default());
+    for it in 0..iterations {
+        net.begin_iteration(it, &mut rng).unwrap();
+        let target = Tensor::full(task as f32 + 1.0, (8, 3), &Device::Cpu).unwrap();
+        let loss = net.forward(&input(it as u64)).unwrap().sub(&target).unwrap().sqr().unwrap().mean_all().unwrap();
+        adam.step(&net.params(), &loss.backward().unwrap()).unwrap();
+    }
+}
+
+fn first_task(cfg: &MaskConfig) -> MaskedMlp {
+    let mut net = MaskedMlp::new("actor", &[6, 16, 3], Activation::Elu, cfg, 2).unwrap();
+    start(&mut net, 0, &[], cfg);
+    steps(&mut net, 0, 5);
+    net.end_task(&mut ChaCha8Rng::seed_from_u64(0)).unwrap();
+    net
+}
+
+#[test]
+fn without_the_occupied_score_gradient_only_vacant_scores_train() {
+    for occupied_too in [true, false] {
+        let cfg = MaskConfig { score_grad_occupied: occupied_too, reinit: false, ..MaskConfig::default() };
+        let mut net = first_task(&cfg);
+        start(&mut net, 1, &[], &cfg);
+        let before: Vec<Vec<f32>> = net.layers().iter().map(|l| l.score_values().unwrap()).collect();
+        steps(&mut net, 1, 5);
+        let (mut occupied_moved, mut vacant_moved) = (0, 0);
+        for (l, start) in net.layers().iter().zip(&before) {
+            let now = l.score_values().unwrap();
+            for i in (0..now.len()).filter(|&i| now[i] != start[i]) {
+                match l.states()[i] {
+                    ElementState::Occupied => occupied_moved += 1,
+                    ElementState::Vacant => vacant_moved += 1,
+                    ElementState::Private(_) => {}
+                }
+            }
+        }
+        assert!(vacant_moved > 0, "vacant scores train either way");
+        assert_eq!(occupied_moved > 0, occupied_too, "occupied scores moved {occupied_moved} (switch {occupied_too})");
+    }
+}
+
+#[test]
+fn a_zero_bias_start_ignores_the_related_tasks_biases() {
+    for (bias_start, zero) in [(BiasStart::Related, false), (BiasStart::Zero, true)] {
+        let cfg = MaskConfig { bias_start, ..MaskConfig::default() };
+        let mut net = first_task(&cfg);
+        start(&mut net, 1, &[0], &cfg);
+        for l in net.layers() {
+            let bias = l.training_bias().unwrap().unwrap();
+            let related = l.task_bias(0).unwrap();
+            assert!(related.iter().any(|b| *b != 0.0), "task 0 learned a bias");
+            if zero {
+                assert!(bias.iter().all(|b| *b == 0.0), "{}: {bias:?}", l.name());
+            } else {
+                assert_eq!(bias, related, "{}: the related task's bias", l.name());
+            }
+        }
+    }
+}
