@@ -31,12 +31,15 @@ use crate::config::net::{Activation, MaskConfig};
 use crate::util::{sha256_hex, write_atomic};
 use anyhow::{bail, ensure, Context};
 use candle_core::{Device, Tensor, Var};
-use safetensors::{Dtype, SafeTensors};
+use safetensors::Dtype;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
 mod dense;
+mod tensors;
+
+use tensors::{f32_raw, serialize, Raw, Reader};
 
 /// Bumped whenever the layout of a policy directory changes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -116,27 +119,6 @@ struct LayerEntry {
     name: String,
     shape: [usize; 2],
     init_bound: f32,
-}
-
-struct Raw {
-    dtype: Dtype,
-    shape: Vec<usize>,
-    bytes: Vec<u8>,
-}
-
-fn f32_raw(values: &[f32], shape: Vec<usize>) -> Raw {
-    Raw { dtype: Dtype::F32, shape, bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect() }
-}
-
-fn serialize(
-    tensors: &BTreeMap<String, Raw>,
-    metadata: Option<std::collections::HashMap<String, String>>,
-) -> anyhow::Result<Vec<u8>> {
-    let views = tensors
-        .iter()
-        .map(|(k, r)| Ok((k.clone(), safetensors::tensor::TensorView::new(r.dtype, r.shape.clone(), &r.bytes)?)))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    Ok(safetensors::serialize(views, metadata)?)
 }
 
 /// Writes a policy directory (creating it). `tasks` names every TaskId the networks use.
@@ -263,61 +245,6 @@ fn read_checked(dir: &Path, file: &str, manifest: &Manifest) -> anyhow::Result<V
         path.display()
     );
     Ok(bytes)
-}
-
-struct Reader<'a> {
-    file: String,
-    st: SafeTensors<'a>,
-}
-
-impl<'a> Reader<'a> {
-    fn new(file: &Path, bytes: &'a [u8]) -> anyhow::Result<Self> {
-        let st = SafeTensors::deserialize(bytes)
-            .map_err(|e| anyhow::anyhow!("{}: not a valid safetensors file: {e:?}", file.display()))?;
-        Ok(Self { file: file.display().to_string(), st })
-    }
-
-    fn raw(&self, name: &str, dtype: Dtype, shape: &[usize]) -> anyhow::Result<&'a [u8]> {
-        let t = self.st.tensor(name).map_err(|_| anyhow::anyhow!("{}: missing tensor {name}", self.file))?;
-        ensure!(t.dtype() == dtype, "{}: tensor {name} has dtype {:?}, expected {dtype:?}", self.file, t.dtype());
-        ensure!(t.shape() == shape, "{}: tensor {name} has shape {:?}, expected {shape:?}", self.file, t.shape());
-        Ok(t.data())
-    }
-
-    fn f32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f32>> {
-        Ok(self
-            .raw(name, Dtype::F32, shape)?
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect())
-    }
-
-    /// "{layer}.log_sigma", or ln of "{layer}.sigma" in files from before sigma was trained in log space.
-    fn log_sigma(&self, layer: &str) -> anyhow::Result<Vec<f32>> {
-        let name = format!("{layer}.log_sigma");
-        if self.st.tensor(&name).is_ok() {
-            return self.f32s(&name, &[1]);
-        }
-        let legacy = format!("{layer}.sigma");
-        if self.st.tensor(&legacy).is_err() {
-            bail!("{}: missing tensor {name}", self.file);
-        }
-        let sigma = self.f32s(&legacy, &[1])?;
-        ensure!(sigma.iter().all(|s| *s > 0.0), "{}: tensor {legacy} = {sigma:?}, expected a sigma > 0", self.file);
-        Ok(sigma.iter().map(|s| s.ln()).collect())
-    }
-
-    fn u32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u32>> {
-        Ok(self
-            .raw(name, Dtype::U32, shape)?
-            .chunks_exact(4)
-            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect())
-    }
-
-    fn shape_of(&self, name: &str) -> anyhow::Result<Vec<usize>> {
-        Ok(self.st.tensor(name).map_err(|_| anyhow::anyhow!("{}: missing tensor {name}", self.file))?.shape().to_vec())
-    }
 }
 
 fn var(values: Vec<f32>, shape: &[usize]) -> anyhow::Result<Var> {
