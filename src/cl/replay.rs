@@ -9,6 +9,7 @@
 //! Replay batches are drawn from a stream seeded by the step count alone, so
 //! a resumed run draws the same rows without saving a random state.
 
+use crate::nn::checkpoint::{integer_tensor, tensor_integer};
 use crate::nn::TaskId;
 use crate::rl::{OutputSample, PolicyProbe};
 use candle_core::{Device, Tensor};
@@ -134,11 +135,7 @@ impl ReplayBuffers {
             out.insert(format!("{prefix}.t{t}.means"), Tensor::from_slice(&r.means, (rows, outs), &Device::Cpu)?);
             out.insert(format!("{prefix}.t{t}.sigma"), Tensor::from_slice(&r.sigma, outs, &Device::Cpu)?);
         }
-        let steps = self.steps as u64;
-        out.insert(
-            format!("{prefix}.steps"),
-            Tensor::new(&[(steps >> 24) as f32, (steps & 0xff_ffff) as f32], &Device::Cpu)?,
-        );
+        out.insert(format!("{prefix}.steps"), integer_tensor(self.steps as u64)?);
         Ok(out)
     }
 
@@ -168,13 +165,8 @@ impl ReplayBuffers {
             );
             tasks.push(replay);
         }
-        let steps = match state.get(&format!("{prefix}.steps")) {
-            Some(t) => match t.to_vec1::<f32>()?.as_slice() {
-                [hi, lo] => ((*hi as usize) << 24) | *lo as usize,
-                other => anyhow::bail!("{prefix}.steps has {} values, expected 2", other.len()),
-            },
-            None => 0,
-        };
+        let key = format!("{prefix}.steps");
+        let steps = state.get(&key).map(|t| tensor_integer(t, &key)).transpose()?.unwrap_or(0) as usize;
         tasks.sort_by_key(|r| r.task);
         Ok(Self { tasks, steps, current: None })
     }

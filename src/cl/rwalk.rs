@@ -21,6 +21,7 @@
 
 use super::method::ContinualMethod;
 use super::quadratic_penalty::{is_regularised, QuadraticPenalty};
+use crate::nn::checkpoint::{integer_tensor, tensor_integer};
 use crate::nn::{NetworkKind, Param, TaskId};
 use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
 use candle_core::backprop::GradStore;
@@ -226,10 +227,7 @@ impl UpdateHooks for RwalkHooks {
         for (k, v) in &self.score {
             out.insert(format!("rwalk_score.{k}"), v.clone());
         }
-        out.insert(
-            "rwalk_steps".into(),
-            Tensor::new(&[(self.steps >> 24) as f32, (self.steps & 0xff_ffff) as f32], &candle_core::Device::Cpu)?,
-        );
+        out.insert("rwalk_steps".into(), integer_tensor(self.steps as u64)?);
         Ok(out)
     }
 
@@ -240,13 +238,8 @@ impl UpdateHooks for RwalkHooks {
         };
         self.fisher = pick("rwalk_fisher.");
         self.score = pick("rwalk_score.");
-        self.steps = match state.get("rwalk_steps") {
-            Some(t) => match t.to_vec1::<f32>()?.as_slice() {
-                [hi, lo] => ((*hi as usize) << 24) | *lo as usize,
-                other => anyhow::bail!("rwalk_steps has {} values, expected 2", other.len()),
-            },
-            None => 0,
-        };
+        self.steps =
+            state.get("rwalk_steps").map(|t| tensor_integer(t, "rwalk_steps")).transpose()?.unwrap_or(0) as usize;
         Ok(())
     }
 }

@@ -388,12 +388,8 @@ fn put_normalizer(prefix: &str, n: &RunningNormalizer, out: &mut BTreeMap<String
     out.insert(format!("{prefix}.mean"), Tensor::new(n.mean().as_slice(), &Device::Cpu)?);
     out.insert(format!("{prefix}.var"), Tensor::new(n.var().as_slice(), &Device::Cpu)?);
     out.insert(format!("{prefix}.count"), Tensor::new(&[n.count() as f32], &Device::Cpu)?);
-    // The row count exactly (f32 holds integers only up to 2^24): high and low 24 bits.
-    let count = n.count() as u64;
-    out.insert(
-        format!("{prefix}.count_exact"),
-        Tensor::new(&[(count >> 24) as f32, (count & 0xff_ffff) as f32], &Device::Cpu)?,
-    );
+    // The row count exactly (f32 holds integers only up to 2^24).
+    out.insert(format!("{prefix}.count_exact"), checkpoint::integer_tensor(n.count() as u64)?);
     Ok(())
 }
 
@@ -402,10 +398,7 @@ fn get_normalizer(prefix: &str, extras: &BTreeMap<String, Tensor>, clip: f32) ->
         extras.get(&format!("{prefix}.{key}")).with_context(|| format!("missing extra tensor {prefix}.{key}"))
     };
     let count = match extras.get(&format!("{prefix}.count_exact")) {
-        Some(t) => match t.flatten_all()?.to_vec1::<f32>()?.as_slice() {
-            [hi, lo] => ((*hi as u64) << 24 | *lo as u64) as f64,
-            other => anyhow::bail!("{prefix}.count_exact has {} values, expected 2", other.len()),
-        },
+        Some(t) => checkpoint::tensor_integer(t, &format!("{prefix}.count_exact"))? as f64,
         None => f64::from(get("count")?.flatten_all()?.to_vec1::<f32>()?.first().copied().unwrap_or(0.0)),
     };
     let mut n =

@@ -251,6 +251,20 @@ fn var(values: Vec<f32>, shape: &[usize]) -> anyhow::Result<Var> {
     Ok(Var::from_tensor(&Tensor::from_vec(values, shape, &Device::Cpu)?)?)
 }
 
+/// An integer as a checkpoint extra, exactly: f32 holds integers only up to 2^24, so the
+/// tensor is [high, low] 24 bits (counts, step counters).
+pub fn integer_tensor(n: u64) -> candle_core::Result<Tensor> {
+    Tensor::new(&[(n >> 24) as f32, (n & 0xff_ffff) as f32], &Device::Cpu)
+}
+
+/// The integer [`integer_tensor`] wrote; `name` (the extra's key) is in the error.
+pub fn tensor_integer(t: &Tensor, name: &str) -> anyhow::Result<u64> {
+    match t.flatten_all()?.to_vec1::<f32>()?.as_slice() {
+        [hi, lo] => Ok((*hi as u64) << 24 | *lo as u64),
+        other => bail!("{name} has {} values, expected 2", other.len()),
+    }
+}
+
 /// Loads a policy directory written by [`save_policy`].
 pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
     let manifest_path = dir.join(MANIFEST_FILE);
