@@ -3,16 +3,11 @@
 //! scores train; with `bias_start = "zero"` a task with related tasks starts
 //! from a zero bias, as a task without any does.
 
-use candle_core::{Device, Tensor};
-use quadcl::nn::{Activation, BiasStart, ElementState, MaskConfig, MaskedAdam, MaskedMlp};
+mod nn_common;
+use nn_common::train_steps;
+use quadcl::nn::{Activation, BiasStart, ElementState, MaskConfig, MaskedMlp};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-
-fn input(seed: u64) -> Tensor {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let v: Vec<f32> = (0..8 * 6).map(|_| rand::Rng::gen_range(&mut rng, -1.0f32..1.0)).collect();
-    Tensor::from_vec(v, (8, 6), &Device::Cpu).unwrap()
-}
 
 /// Starts `task` (related to `related`) under `cfg`.
 fn start(net: &mut MaskedMlp, task: usize, related: &[usize], cfg: &MaskConfig) {
@@ -20,16 +15,9 @@ fn start(net: &mut MaskedMlp, task: usize, related: &[usize], cfg: &MaskConfig) 
     net.begin_task(task, related).unwrap();
 }
 
-/// `iterations` steps of a squared-output loss on the task in progress.
+/// `iterations` steps of the task in progress, the masks drawn from a stream seeded by `task`.
 fn steps(net: &mut MaskedMlp, task: usize, iterations: usize) {
-    let mut rng = ChaCha8Rng::seed_from_u64(task as u64);
-    let mut adam = MaskedAdam::new(Default::default());
-    for it in 0..iterations {
-        net.begin_iteration(it, &mut rng).unwrap();
-        let target = Tensor::full(task as f32 + 1.0, (8, 3), &Device::Cpu).unwrap();
-        let loss = net.forward(&input(it as u64)).unwrap().sub(&target).unwrap().sqr().unwrap().mean_all().unwrap();
-        adam.step(&net.params(), &loss.backward().unwrap()).unwrap();
-    }
+    train_steps(net, task, iterations, &mut ChaCha8Rng::seed_from_u64(task as u64));
 }
 
 fn first_task(cfg: &MaskConfig) -> MaskedMlp {

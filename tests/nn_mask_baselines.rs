@@ -3,16 +3,12 @@
 //! recall ignores later tasks' weights; Piggyback never moves a weight, masks
 //! only the base's, and recalls exactly.
 
-use candle_core::{Device, Tensor};
-use quadcl::nn::{Activation, ElementState, MaskConfig, MaskedAdam, MaskedMlp, SelectionRule};
+mod nn_common;
+use candle_core::Tensor;
+use nn_common::{input, train_steps};
+use quadcl::nn::{Activation, ElementState, MaskConfig, MaskedMlp, SelectionRule};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-
-fn input(seed: u64) -> Tensor {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let v: Vec<f32> = (0..8 * 6).map(|_| rand::Rng::gen_range(&mut rng, -1.0f32..1.0)).collect();
-    Tensor::from_vec(v, (8, 6), &Device::Cpu).unwrap()
-}
 
 fn values(t: &Tensor) -> Vec<f32> {
     t.flatten_all().unwrap().to_vec1().unwrap()
@@ -23,14 +19,7 @@ fn train(net: &mut MaskedMlp, task: usize, cfg: &MaskConfig, iterations: usize) 
     net.set_mask_config(cfg).unwrap();
     net.begin_task(task, &[]).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(task as u64);
-    let mut adam = MaskedAdam::new(Default::default());
-    for it in 0..iterations {
-        net.begin_iteration(it, &mut rng).unwrap();
-        let target = Tensor::full(task as f32 + 1.0, (8, 3), &Device::Cpu).unwrap();
-        let loss = net.forward(&input(it as u64)).unwrap().sub(&target).unwrap().sqr().unwrap().mean_all().unwrap();
-        let grads = loss.backward().unwrap();
-        adam.step(&net.params(), &grads).unwrap();
-    }
+    train_steps(net, task, iterations, &mut rng);
     net.end_task(&mut rng).unwrap();
 }
 

@@ -1,5 +1,7 @@
 //! Shared by the nn integration tests: ten synthetic regression tasks (random
-//! linear targets y = A_t x) and a small training loop over a MaskedMlp.
+//! linear targets y = A_t x) and a small training loop over a MaskedMlp; and,
+//! for the tests of the mask rules on a 6-in, 3-out MaskedMlp, a fixed input
+//! batch and a few steps of a task towards a constant target.
 #![allow(dead_code)]
 
 use candle_core::{Device, Tensor};
@@ -76,4 +78,23 @@ pub fn probe() -> Tensor {
 
 pub fn bits(t: &Tensor) -> Vec<u32> {
     t.flatten_all().unwrap().to_vec1::<f32>().unwrap().iter().map(|v| v.to_bits()).collect()
+}
+
+/// A (8, 6) batch in [-1, 1) from `seed`.
+pub fn input(seed: u64) -> Tensor {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let v: Vec<f32> = (0..8 * 6).map(|_| rng.gen_range(-1.0f32..1.0)).collect();
+    Tensor::from_vec(v, (8, 6), &Device::Cpu).unwrap()
+}
+
+/// `iterations` Adam steps of a squared loss towards `task + 1` on the task in progress of a
+/// 6-in, 3-out network, the masks drawn from `rng`.
+pub fn train_steps(net: &mut MaskedMlp, task: usize, iterations: usize, rng: &mut ChaCha8Rng) {
+    let mut adam = MaskedAdam::new(Default::default());
+    for it in 0..iterations {
+        net.begin_iteration(it, rng).unwrap();
+        let target = Tensor::full(task as f32 + 1.0, (8, 3), &Device::Cpu).unwrap();
+        let loss = net.forward(&input(it as u64)).unwrap().sub(&target).unwrap().sqr().unwrap().mean_all().unwrap();
+        adam.step(&net.params(), &loss.backward().unwrap()).unwrap();
+    }
 }
