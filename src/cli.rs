@@ -28,8 +28,10 @@ pub enum Command {
     Gait(crate::cmd::gait::GaitArgs),
     /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
     Run(crate::cmd::run::RunArgs),
-    /// Record a policy's episodes on a task into an .mcap file (Foxglove): frames, link shapes, joints, rewards, contacts.
+    /// Record a policy's episodes on a task into an .mcap file (Foxglove) or an .rrd file (Rerun).
     Record(crate::cmd::record::RecordArgs),
+    /// Watch a policy walk on a task in the Rerun 3D viewer, live (and optionally save it as .rrd).
+    View(crate::cmd::view::ViewArgs),
     /// The workbench (also what `quadcl` alone opens): step through a sequence, watch training, masks, the robot.
     Tui(crate::cmd::tui::TuiArgs),
     /// What quadcl understood of a robot's URDF (legs, joints, masses, feet, warnings) and whether it stands.
@@ -50,6 +52,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Finetune(args)) => crate::cmd::finetune::run(args),
         Some(Command::Tui(args)) => crate::cmd::tui::run(args),
         Some(Command::Record(args)) => crate::cmd::record::run(args),
+        Some(Command::View(args)) => crate::cmd::view::run(args),
         Some(Command::Robot(args)) => crate::cmd::robot::run(args),
         None => crate::cmd::tui::run(crate::cmd::tui::TuiArgs::default()),
     }

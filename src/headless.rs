@@ -36,8 +36,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// Stop after this many more completed tasks (the rest can be `resume`d later).
     pub stop_after: Option<usize>,
-    /// Record one evaluation episode of every learned task after each task (MCAP, `DIR/episodes/`).
-    pub record: bool,
+    /// Record one evaluation episode of every learned task after each task (`DIR/episodes/`).
+    pub record: Option<crate::record::RecordFormat>,
     /// Train with this method instead of the run file's (`--method`).
     pub method: Option<String>,
 }

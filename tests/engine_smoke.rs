@@ -7,6 +7,7 @@
 mod engine_common;
 use engine_common::assert_metrics_json_complete;
 use quadcl::headless::{run, RunOptions};
+use quadcl::record::RecordFormat;
 use std::path::Path;
 
 fn smoke() -> std::path::PathBuf {
@@ -114,7 +115,7 @@ fn evaluating_a_learned_task_in_the_middle_of_a_step_changes_no_number_of_the_ru
 fn a_run_with_record_keeps_one_mcap_episode_of_every_learned_task_after_each_step() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("rec");
-    run(&smoke(), &out, RunOptions { record: true, ..Default::default() }).unwrap();
+    run(&smoke(), &out, RunOptions { record: Some(RecordFormat::Mcap), ..Default::default() }).unwrap();
     for (step, expected) in [
         ("step-00-crash_FL", vec!["crash_FL.mcap"]),
         ("step-02-noise_FR", vec!["crash_FL.mcap", "invert_RR.mcap", "noise_FR.mcap"]),
@@ -135,7 +136,8 @@ fn a_run_with_record_keeps_one_mcap_episode_of_every_learned_task_after_each_ste
     std::fs::write(&toy, "[run]\nlearner = \"toy\"\n[[task]]\nname = \"crash:FL\"\n").unwrap();
     let err = format!(
         "{:#}",
-        run(&toy, &tmp.path().join("t"), RunOptions { record: true, ..Default::default() }).unwrap_err()
+        run(&toy, &tmp.path().join("t"), RunOptions { record: Some(RecordFormat::Mcap), ..Default::default() })
+            .unwrap_err()
     );
     assert!(err.contains("--record") && err.contains("toy"), "{err}");
 }

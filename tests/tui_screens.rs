@@ -73,11 +73,16 @@ fn the_shipped_run_opens_on_every_screen() {
     app.update(Action::Worker(WorkerMsg::Robot { task: "crash:FL".into(), frame: Box::new(frame) }));
     snap!("robot_crash_fl_120x40", screen(&app, 120, 40, hide));
 
-    // `v`: Rerun is not there yet, so 20 s of the task are recorded for Foxglove.
-    act(&mut app, &mut worker, Action::OpenViewer, |a| a.messages.last().is_some_and(|m| m.starts_with("recorded")));
-    assert!(app.messages.iter().any(|m| m.contains("Rerun 3D view is not there yet")));
-    let episode = tmp.path().join("workbench/episodes/workbench-crash_FL.mcap");
-    assert!(mcap::Summary::read(&std::fs::read(&episode).unwrap()).unwrap().is_some(), "a complete MCAP");
+    // `v`: 20 s of the task in the Rerun viewer, or (no `rerun` on PATH, as in CI) into the .rrd only.
+    let shown = |m: &String| m.starts_with("showed") || m.starts_with("no Rerun viewer");
+    act(&mut app, &mut worker, Action::OpenViewer, |a| a.messages.last().is_some_and(shown));
+    assert!(app.messages.iter().any(|m| m.starts_with("opening crash:FL in the Rerun viewer")), "{:?}", app.messages);
+    let episode = tmp.path().join("workbench/episodes/workbench-crash_FL.rrd");
+    let message = app.messages.last().unwrap();
+    assert!(message.contains(&episode.display().to_string()), "{message}");
+    let file = std::io::BufReader::new(std::fs::File::open(&episode).unwrap());
+    let messages = re_log_encoding::DecoderApp::decode_lazy(file).collect::<Result<Vec<_>, _>>().unwrap();
+    assert!(messages.len() > 10, "a complete recording: {} messages", messages.len());
     worker.shutdown();
 }
 

@@ -10,4 +10,5 @@ pub mod robot;
 pub mod run;
 pub mod train;
 pub mod tui;
+pub mod view;
 pub mod welcome;

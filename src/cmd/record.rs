@@ -1,13 +1,15 @@
-//! `quadcl record --policy DIR --task T --seconds S --out FILE.mcap [--episodes N]
-//! [--vx V --vy V --wz W] [--force]`: a policy's episodes on a task into a file
-//! (see `record::record_episodes`), then a line saying what was written.
+//! `quadcl record --policy DIR --task T --seconds S --out FILE.mcap|FILE.rrd
+//! [--episodes N] [--vx V --vy V --wz W] [--force]`: a policy's episodes on a
+//! task into a file (see `record::record_episodes`), then a line saying what
+//! was written. [`EpisodeArgs`] are the options `quadcl view` shares.
 
 use clap::Args;
-use quadcl::record::{record_episodes, RecordOptions};
+use quadcl::record::{record_episodes, RecordOptions, RecordSummary};
 use std::path::PathBuf;
 
+/// Which policy runs on which task, for how long, under which command.
 #[derive(Debug, Args)]
-pub struct RecordArgs {
+pub struct EpisodeArgs {
     /// Policy directory (any form `quadcl eval` takes: a policy, a training checkpoint, a sequence's checkpoint).
     #[arg(long)]
     pub policy: PathBuf,
@@ -20,9 +22,6 @@ pub struct RecordArgs {
     /// Stop after this many finished episodes (falls or time-outs).
     #[arg(long)]
     pub episodes: Option<u64>,
-    /// Output file: `.mcap` (Foxglove).
-    #[arg(long)]
-    pub out: PathBuf,
     /// Hold this forward velocity command, m/s (with --vy and --wz; without any, the env's random commands).
     #[arg(long, allow_hyphen_values = true)]
     pub vx: Option<f32>,
@@ -35,26 +34,40 @@ pub struct RecordArgs {
     /// Seed of the environment's reset.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Replace an existing --out file.
+    /// Replace an existing output file.
     #[arg(long)]
     pub force: bool,
 }
 
+impl EpisodeArgs {
+    pub fn options(&self) -> RecordOptions {
+        let held = self.vx.is_some() || self.vy.is_some() || self.wz.is_some();
+        let command = held.then(|| [self.vx.unwrap_or(0.0), self.vy.unwrap_or(0.0), self.wz.unwrap_or(0.0)]);
+        RecordOptions { seconds: self.seconds, episodes: self.episodes, command, seed: self.seed, force: self.force }
+    }
+
+    /// The line saying what was done.
+    pub fn report(&self, verb: &str, into: &str, s: &RecordSummary) -> String {
+        let size = if s.bytes > 0 { format!(" ({:.1} MB)", s.bytes as f64 / 1e6) } else { String::new() };
+        format!(
+            "{verb} {} control steps ({:.1} s simulated, {} episodes ended) of {} into {into}{size} in {:.1} s",
+            s.control_steps, s.sim_seconds, s.episodes, self.task, s.wall_seconds
+        )
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct RecordArgs {
+    #[command(flatten)]
+    pub episode: EpisodeArgs,
+    /// Output file: `.mcap` (Foxglove) or `.rrd` (Rerun).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
 pub fn run(args: RecordArgs) -> anyhow::Result<()> {
-    let held = args.vx.is_some() || args.vy.is_some() || args.wz.is_some();
-    let command = held.then(|| [args.vx.unwrap_or(0.0), args.vy.unwrap_or(0.0), args.wz.unwrap_or(0.0)]);
-    let options =
-        RecordOptions { seconds: args.seconds, episodes: args.episodes, command, seed: args.seed, force: args.force };
-    let s = record_episodes(&args.policy, &args.task, &args.out, &options)?;
-    println!(
-        "recorded {} control steps ({:.1} s simulated, {} episodes ended) of {} into {} ({:.1} MB) in {:.1} s",
-        s.control_steps,
-        s.sim_seconds,
-        s.episodes,
-        args.task,
-        args.out.display(),
-        s.bytes as f64 / 1e6,
-        s.wall_seconds
-    );
+    let e = &args.episode;
+    let s = record_episodes(&e.policy, &e.task, &args.out, &e.options())?;
+    println!("{}", e.report("recorded", &args.out.display().to_string(), &s));
     Ok(())
 }

@@ -19,9 +19,9 @@ pub struct RunArgs {
     /// Stop after this many completed tasks (continue later with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
-    /// After each task, record one evaluation episode of every learned task into DIR/episodes/ (`mcap`: Foxglove).
-    #[arg(long, value_parser = ["mcap"])]
-    pub record: Option<String>,
+    /// After each task, record one evaluation episode of every learned task into DIR/episodes/ (`mcap`: Foxglove, `rrd`: Rerun).
+    #[arg(long, value_name = "mcap|rrd")]
+    pub record: Option<quadcl::record::RecordFormat>,
     /// Train with this method instead of the run file's [method] name: ours, wsn, packnet, piggyback, finetune, ewc, si, rwalk, er, agem
     /// (its settings still come from the file's [method.NAME] table). Give it again with --resume.
     #[arg(long)]
@@ -36,7 +36,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             resume: args.resume,
             progress: std::io::stderr().is_terminal(),
             stop_after: args.stop_after,
-            record: args.record.is_some(),
+            record: args.record,
             method: args.method.clone(),
         },
     )?;

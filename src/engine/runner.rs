@@ -20,7 +20,7 @@ use super::run_dir::{task_file_name, MetricsFile, RunDir, CHOSEN_FILE, EPISODES,
 use super::session::{ChosenSettings, Session, StepOutcome};
 use super::toy_learner::ToyLearner;
 use crate::cl::TaskSpec;
-use crate::record::{record_episodes, RecordOptions};
+use crate::record::{record_episodes, RecordFormat, RecordOptions};
 use crate::util::{replace_dir, write_atomic};
 use anyhow::Context;
 use std::collections::BTreeMap;
@@ -65,8 +65,8 @@ pub struct Runner {
     written_tasks: usize,
     keep_last_checkpoint_only: bool,
     base_policy: Option<PathBuf>,
-    /// Record one evaluation episode of every learned task after each step (`--record mcap`).
-    record: bool,
+    /// Record one evaluation episode of every learned task after each step (`--record mcap|rrd`).
+    record: Option<RecordFormat>,
     learner: LearnerKind,
     seed: u64,
     episode_s: f64,
@@ -225,7 +225,7 @@ impl Runner {
             run_text,
             keep_last_checkpoint_only: cfg.run.keep_last_checkpoint_only,
             base_policy: cfg.run.base_policy.clone(),
-            record: false,
+            record: None,
             learner: cfg.run.learner,
             seed: cfg.config.seed,
             episode_s: f64::from(cfg.config.env.episode_s),
@@ -259,18 +259,18 @@ impl Runner {
         steps.last().map(|s| self.dir.checkpoint(s.step, &s.name))
     }
 
-    /// After each step, record one evaluation episode of every learned task as MCAP into
-    /// `episodes/step-NN-TASK/TASK.mcap` (the PPO learner only: its checkpoints are policies).
-    pub fn record_episodes(&mut self, on: bool) -> anyhow::Result<()> {
+    /// After each step, record one evaluation episode of every learned task as `format` into
+    /// `episodes/step-NN-TASK/TASK.mcap` (or `.rrd`; the PPO learner only: its checkpoints are policies).
+    pub fn record_episodes(&mut self, format: Option<RecordFormat>) -> anyhow::Result<()> {
         anyhow::ensure!(
-            !on || self.learner == LearnerKind::Ppo,
+            format.is_none() || self.learner == LearnerKind::Ppo,
             "--record needs the PPO learner: a [run] learner = \"toy\" run has no robot to record"
         );
-        self.record = on;
+        self.record = format;
         Ok(())
     }
 
-    fn record_step(&self, step: usize) -> anyhow::Result<()> {
+    fn record_step(&self, step: usize, format: RecordFormat) -> anyhow::Result<()> {
         let results = self.session.results();
         let checkpoint = self.dir.checkpoint(step, &results.steps[step].name);
         let folder = self.dir.root.join(EPISODES).join(checkpoint.file_name().unwrap_or_default());
@@ -284,8 +284,13 @@ impl Runner {
                 seed: crate::util::derive_seed(self.seed, crate::util::Stream::SequenceEval(t)),
                 force: true,
             };
-            record_episodes(&checkpoint, name, &folder.join(format!("{}.mcap", task_file_name(name))), &options)
-                .with_context(|| format!("recording {name} after step {step}"))?;
+            record_episodes(
+                &checkpoint,
+                name,
+                &folder.join(format!("{}.{}", task_file_name(name), format.extension())),
+                &options,
+            )
+            .with_context(|| format!("recording {name} after step {step}"))?;
         }
         Ok(())
     }
@@ -334,8 +339,8 @@ impl Runner {
         let name = &results.steps[step].name;
         self.dir.write_checkpoint(step, name, self.session.learner(), &results.tasks)?;
         self.save()?;
-        if self.record {
-            self.record_step(step)?;
+        if let Some(format) = self.record {
+            self.record_step(step, format)?;
         }
         let results = self.session.results();
         if self.keep_last_checkpoint_only && step > 0 {

@@ -58,6 +58,19 @@ impl ElementView {
             ElementView::PrivateToTask => "private (this task)",
         }
     }
+
+    /// Its colour (r, g, b) wherever masks are drawn: the workbench's heatmap and legend, and
+    /// the mask images of a Rerun recording.
+    pub fn rgb(self) -> (u8, u8, u8) {
+        match self {
+            ElementView::Vacant => (48, 48, 48),
+            ElementView::OccupiedByOthers => (70, 110, 200),
+            ElementView::PrivateToOthers => (150, 80, 200),
+            ElementView::SelectedFromVacant => (60, 210, 90),
+            ElementView::SelectedFromOccupied => (235, 195, 50),
+            ElementView::PrivateToTask => (235, 80, 60),
+        }
+    }
 }
 
 /// One layer's elements seen from one task.

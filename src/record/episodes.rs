@@ -1,15 +1,17 @@
-//! `quadcl record`: a policy's episodes on a task, recorded into a file by
-//! its extension (`.mcap`; `.rrd` comes with the Rerun recorder). The policy
-//! runs deterministically in one env (no pushes, nominal physics) under a
-//! held command or the env's own random commands, for a number of seconds
-//! or of finished episodes, whichever comes first.
+//! `quadcl record` and `quadcl view`: a policy's episodes on a task, recorded
+//! into a file by its extension (`.mcap` for Foxglove, `.rrd` for Rerun) or
+//! streamed to a Rerun viewer. The policy runs deterministically in one env
+//! (no pushes, nominal physics) under a held command or the env's own random
+//! commands, for a number of seconds or of finished episodes, whichever comes
+//! first; a live view runs at the speed of simulated time.
 
-use super::mcap::McapRecorder;
+use super::recorder::Recorder;
+use super::rerun::RerunSink;
+use super::rerun_scene::RerunScene;
 use crate::rl::RobotViewer;
-use crate::sim::StepObserver;
 use anyhow::Context;
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// The longest recording, simulated seconds (a bound on what a typo can fill a disk with).
 pub const MAX_SECONDS: f64 = 3600.0;
@@ -29,6 +31,36 @@ pub struct RecordOptions {
     pub force: bool,
 }
 
+/// A recording's file format, by its extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RecordFormat {
+    /// MCAP for Foxglove.
+    Mcap,
+    /// Rerun's `.rrd`.
+    Rrd,
+}
+
+impl RecordFormat {
+    /// `mcap` or `rrd`.
+    pub fn extension(self) -> &'static str {
+        match self {
+            RecordFormat::Mcap => "mcap",
+            RecordFormat::Rrd => "rrd",
+        }
+    }
+}
+
+impl std::str::FromStr for RecordFormat {
+    type Err = anyhow::Error;
+    fn from_str(s: &str) -> anyhow::Result<Self> {
+        match s {
+            "mcap" => Ok(RecordFormat::Mcap),
+            "rrd" => Ok(RecordFormat::Rrd),
+            other => anyhow::bail!("unknown recording format {other:?} (use mcap or rrd)"),
+        }
+    }
+}
+
 /// What was recorded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordSummary {
@@ -39,37 +71,81 @@ pub struct RecordSummary {
     pub bytes: u64,
 }
 
-/// Records `policy` (any policy directory form `quadcl eval` takes) on `task` into `out`.
+/// Records `policy` (any policy directory form `quadcl eval` takes) on `task` into `out`
+/// (`.mcap` or `.rrd`).
 pub fn record_episodes(policy: &Path, task: &str, out: &Path, o: &RecordOptions) -> anyhow::Result<RecordSummary> {
-    anyhow::ensure!(
-        o.seconds.is_finite() && o.seconds > 0.0 && o.seconds <= MAX_SECONDS,
-        "--seconds must be in (0, {MAX_SECONDS}], got {}",
-        o.seconds
-    );
-    anyhow::ensure!(o.episodes != Some(0), "--episodes must be at least 1");
+    check_options(o)?;
     anyhow::ensure!(
         o.force || !out.exists(),
         "{} exists: pass --force to replace it, or choose another --out",
         out.display()
     );
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
-    let mut viewer = RobotViewer::new(policy, task, o.seed, o.command)?;
-    let recorder: Box<dyn StepObserver> = match ext {
-        "mcap" => Box::new(McapRecorder::create(out, viewer.env().robot())?),
-        "rrd" => anyhow::bail!(
-            "{}: .rrd recordings (Rerun) are not built yet; record to an .mcap file (Foxglove) instead",
-            out.display()
-        ),
-        other => anyhow::bail!("{}: unknown recording format {other:?} (use .mcap)", out.display()),
+    let viewer = RobotViewer::new(policy, task, o.seed, o.command)?;
+    let recorder = match ext {
+        "mcap" => Recorder::mcap(out, viewer.env().robot())?,
+        "rrd" => Recorder::rerun(&[RerunSink::Save(out.to_path_buf())], viewer.env().robot(), &scene(&viewer, policy))?,
+        other => anyhow::bail!("{}: unknown recording format {other:?} (use .mcap or .rrd)", out.display()),
     };
-    viewer.observe(recorder);
+    let mut summary =
+        run(viewer, recorder, o, false).with_context(|| format!("recording {task} into {}", out.display()))?;
+    summary.bytes = std::fs::metadata(out).map_or(0, |m| m.len());
+    Ok(summary)
+}
+
+/// Streams `policy` on `task` to the Rerun `sinks` (a live viewer, a file, or both), pacing
+/// the steps at the speed of simulated time while a viewer watches.
+pub fn view_policy(policy: &Path, task: &str, sinks: &[RerunSink], o: &RecordOptions) -> anyhow::Result<RecordSummary> {
+    check_options(o)?;
+    for sink in sinks {
+        if let RerunSink::Save(out) = sink {
+            anyhow::ensure!(
+                o.force || !out.exists(),
+                "{} exists: pass --force to replace it, or choose another --save",
+                out.display()
+            );
+        }
+    }
+    let viewer = RobotViewer::new(policy, task, o.seed, o.command)?;
+    let recorder = Recorder::rerun(sinks, viewer.env().robot(), &scene(&viewer, policy))?;
+    let live = sinks.iter().any(|s| !matches!(s, RerunSink::Save(_)));
+    run(viewer, recorder, o, live).with_context(|| format!("streaming {task} to Rerun"))
+}
+
+fn check_options(o: &RecordOptions) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        o.seconds.is_finite() && o.seconds > 0.0 && o.seconds <= MAX_SECONDS,
+        "--seconds must be in (0, {MAX_SECONDS}], got {}",
+        o.seconds
+    );
+    anyhow::ensure!(o.episodes != Some(0), "--episodes must be at least 1");
+    Ok(())
+}
+
+/// What a Rerun recording of `viewer` shows besides the motion.
+fn scene(viewer: &RobotViewer, policy: &Path) -> RerunScene {
+    RerunScene { task: viewer.task().to_string(), policy: policy.display().to_string(), masks: viewer.mask_views() }
+}
+
+/// Steps `viewer` with `recorder` attached until the seconds or the episodes are done.
+fn run(
+    mut viewer: RobotViewer,
+    recorder: Recorder,
+    o: &RecordOptions,
+    realtime: bool,
+) -> anyhow::Result<RecordSummary> {
+    viewer.observe(Box::new(recorder));
     let dt = f64::from(viewer.policy_dt());
     let steps = (o.seconds / dt).round().max(1.0) as usize;
     let start = Instant::now();
     let mut done = 0;
     while done < steps && o.episodes.is_none_or(|n| viewer.episodes() < n) {
-        viewer.step().with_context(|| format!("recording {task} into {}", out.display()))?;
+        viewer.step()?;
         done += 1;
+        if realtime {
+            let ahead = Duration::from_secs_f64(done as f64 * dt).saturating_sub(start.elapsed());
+            std::thread::sleep(ahead);
+        }
     }
     let mut recorder = viewer.take_observer().context("the recorder is attached")?;
     recorder.finish()?;
@@ -78,6 +154,20 @@ pub fn record_episodes(policy: &Path, task: &str, out: &Path, o: &RecordOptions)
         episodes: viewer.episodes(),
         sim_seconds: done as f64 * dt,
         wall_seconds: start.elapsed().as_secs_f64(),
-        bytes: std::fs::metadata(out).map_or(0, |m| m.len()),
+        bytes: 0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_recording_format_parses_from_its_extension_and_an_unknown_one_names_the_choices() {
+        for format in [RecordFormat::Mcap, RecordFormat::Rrd] {
+            assert_eq!(format.extension().parse::<RecordFormat>().unwrap(), format);
+        }
+        let err = format!("{:#}", "bag".parse::<RecordFormat>().unwrap_err());
+        assert!(err.contains("bag") && err.contains("mcap") && err.contains("rrd"), "{err}");
+    }
 }

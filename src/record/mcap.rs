@@ -17,7 +17,9 @@
 //! so a file of that name is always a complete MCAP.
 
 use super::foxglove::{self, FrameTransforms};
-use crate::sim::{RobotModel, StepInfo, StepObserver, NUM_LEGS};
+use super::recorder::{Recorder, SampleWriter};
+use super::sample::Sample;
+use crate::sim::{RobotModel, NUM_LEGS};
 use anyhow::Context;
 use serde::Serialize;
 use serde_json::{json, Value};
@@ -30,49 +32,6 @@ use std::path::{Path, PathBuf};
 pub const TOPICS: [&str; 6] = ["/tf", "/scene", "/joint_states", "/command", "/reward_terms", "/contacts"];
 
 const FEET: [&str; NUM_LEGS] = ["FL", "FR", "RL", "RR"];
-
-/// One step as the writer thread needs it (an owned copy of [`StepInfo`]'s numbers).
-struct Sample {
-    t: f64,
-    episode_step: usize,
-    links: [crate::sim::LinkPose; 13],
-    q: [f32; 12],
-    qd: [f32; 12],
-    torques: [f32; 12],
-    command: [f32; 3],
-    reward: Option<(f32, [f32; crate::sim::reward::NUM_TERMS])>,
-    contacts: [bool; NUM_LEGS],
-    foot_pos: [[f32; 3]; NUM_LEGS],
-    push: Option<[f32; 2]>,
-}
-
-impl Sample {
-    fn of(info: &StepInfo) -> Self {
-        let s = info.state;
-        Self {
-            t: info.sim_time,
-            episode_step: info.episode_step,
-            links: *info.links,
-            q: s.q,
-            qd: s.qd,
-            torques: *info.torques,
-            command: info.command,
-            reward: info.reward.map(|(r, terms)| (r, terms.values)),
-            contacts: info.contacts,
-            foot_pos: s.foot_pos,
-            push: info.push,
-        }
-    }
-}
-
-/// Steps waiting for the writer thread at most (then the simulation waits: memory stays bounded).
-const QUEUE: usize = 1024;
-
-/// Records one env's episodes into an MCAP file (a [`StepObserver`]).
-pub struct McapRecorder {
-    queue: Option<std::sync::mpsc::SyncSender<Sample>>,
-    writer: Option<std::thread::JoinHandle<anyhow::Result<()>>>,
-}
 
 /// The writing side, on its own thread.
 struct McapWriter {
@@ -122,19 +81,12 @@ struct Rewards {
     episode_step: usize,
 }
 
-impl McapRecorder {
-    /// Starts `path` (written as `path.partial` until [`StepObserver::finish`]) for `robot`.
+impl Recorder {
+    /// Records into the MCAP file `path` (written as `path.partial` until
+    /// [`StepObserver::finish`](crate::sim::StepObserver::finish)) for `robot`.
     /// A file that cannot be created is an error now.
-    pub fn create(path: &Path, robot: &RobotModel) -> anyhow::Result<Self> {
-        let mut writer = McapWriter::create(path, robot)?;
-        let (queue, samples) = std::sync::mpsc::sync_channel::<Sample>(QUEUE);
-        let thread = std::thread::spawn(move || {
-            for sample in samples {
-                writer.record(&sample);
-            }
-            writer.finish()
-        });
-        Ok(Self { queue: Some(queue), writer: Some(thread) })
+    pub fn mcap(path: &Path, robot: &RobotModel) -> anyhow::Result<Self> {
+        Ok(Recorder::start(McapWriter::create(path, robot)?, "MCAP"))
     }
 }
 
@@ -225,7 +177,7 @@ impl McapWriter {
         }
     }
 
-    fn record(&mut self, info: &Sample) {
+    fn record_sample(&mut self, info: &Sample) {
         let t = info.t;
         let links = std::mem::take(&mut self.links);
         let transforms = links.iter().zip(&info.links).map(|(name, pose)| foxglove::transform(t, "world", name, pose));
@@ -258,7 +210,11 @@ impl McapWriter {
     }
 }
 
-impl McapWriter {
+impl SampleWriter for McapWriter {
+    fn record(&mut self, sample: &Sample) {
+        self.record_sample(sample);
+    }
+
     fn finish(mut self) -> anyhow::Result<()> {
         if let Some(e) = self.error.take() {
             let _ = std::fs::remove_file(&self.partial);
@@ -269,38 +225,5 @@ impl McapWriter {
         drop(w);
         std::fs::rename(&self.partial, &self.path)
             .with_context(|| format!("renaming {} to {}", self.partial.display(), self.path.display()))
-    }
-}
-
-impl StepObserver for McapRecorder {
-    fn on_reset(&mut self, info: &StepInfo) {
-        self.on_step(info);
-    }
-
-    fn on_step(&mut self, info: &StepInfo) {
-        // A writer thread that stopped (an I/O error) reports it at finish.
-        if let Some(q) = &self.queue {
-            if q.send(Sample::of(info)).is_err() {
-                self.queue = None;
-            }
-        }
-    }
-
-    fn finish(&mut self) -> anyhow::Result<()> {
-        self.queue = None;
-        match self.writer.take() {
-            Some(thread) => thread.join().map_err(|_| anyhow::anyhow!("the MCAP writer thread panicked"))?,
-            None => Ok(()),
-        }
-    }
-}
-
-impl Drop for McapRecorder {
-    fn drop(&mut self) {
-        // Not finished (an error upstream): the writer ends, the partial file stays a .partial.
-        self.queue = None;
-        if let Some(thread) = self.writer.take() {
-            let _ = thread.join();
-        }
     }
 }

@@ -121,6 +121,12 @@ impl RobotViewer {
         &self.env
     }
 
+    /// The policy's masks per layer as the task it acts with sees them (what a recording shows;
+    /// empty for a dense network).
+    pub fn mask_views(&self) -> Vec<crate::nn::LayerView> {
+        crate::nn::mask_views(&self.agent.masked_networks(), self.agent.task())
+    }
+
     /// Episodes finished so far.
     pub fn episodes(&self) -> u64 {
         self.episode

@@ -56,7 +56,7 @@ pub enum Action {
     ToggleRunThrough,
     EvaluateSelected,
     Save,
-    /// The selected task in 3D: Rerun is not built yet, so an MCAP episode for Foxglove is recorded.
+    /// The selected task in Rerun's 3D viewer (20 s, also saved as .rrd).
     OpenViewer,
     CurveMetricNext,
     /// Smoothing weight up / down; toggle off and on.
@@ -86,8 +86,8 @@ pub enum Outgoing {
     Engine(Command),
     /// Run the robot view of (policy, task); None stops it.
     Robot(Option<(PathBuf, String)>),
-    /// Record an episode of (policy, task) into the file.
-    Record {
+    /// Show (policy, task) in the Rerun viewer and save it into the `.rrd` file.
+    View {
         policy: PathBuf,
         task: String,
         out: PathBuf,
@@ -283,7 +283,7 @@ impl App {
                 self.send(Command::Save);
                 self.say("saving metrics.json and the log (a task in progress is saved when it ends)");
             }
-            Action::OpenViewer => self.record_selected(),
+            Action::OpenViewer => self.view_selected(),
             Action::CurveMetricNext => self.metric = self.metric.next(),
             Action::SmoothingUp => self.smoothing = (self.smoothing + 0.05).min(0.99),
             Action::SmoothingDown => self.smoothing = (self.smoothing - 0.05).max(0.0),
@@ -375,22 +375,18 @@ impl App {
         }
     }
 
-    /// The 3D view in Rerun is not built yet: records 20 s of the selected learned task as MCAP
-    /// (Foxglove) into the run folder's `episodes/` instead, and says so.
-    fn record_selected(&mut self) {
+    /// The selected learned task in Rerun's 3D viewer for 20 s, saved as `.rrd` into the run
+    /// folder's `episodes/` too.
+    fn view_selected(&mut self) {
         let (Some(row), Some(o)) = (self.selected(), self.opened.as_ref()) else { return };
         let Some(policy) = o.last_checkpoint.clone().filter(|_| row.learned()) else {
             self.say(format!("{} is not learned yet: nothing to show in 3D", row.task));
             return;
         };
         let name = crate::engine::task_file_name(&row.task);
-        let out = o.run_dir.join(crate::engine::EPISODES).join(format!("workbench-{name}.mcap"));
-        self.say(format!(
-            "the Rerun 3D view is not there yet (issue 12); recording {} to {} for Foxglove ...",
-            row.task,
-            out.display()
-        ));
-        self.outbox.push(Outgoing::Record { policy, task: row.task, out });
+        let out = o.run_dir.join(crate::engine::EPISODES).join(format!("workbench-{name}.rrd"));
+        self.say(format!("opening {} in the Rerun viewer (and saving it to {}) ...", row.task, out.display()));
+        self.outbox.push(Outgoing::View { policy, task: row.task, out });
     }
 
     /// Asks the engine for the transfer preview of the next step's related tasks.

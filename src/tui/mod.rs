@@ -52,7 +52,7 @@ pub fn dispatch(app: &mut App, worker: &mut Worker) {
             Outgoing::Engine(c) => worker.send(c),
             Outgoing::Robot(Some((policy, task))) => worker.start_robot(policy, task),
             Outgoing::Robot(None) => worker.stop_robot(),
-            Outgoing::Record { policy, task, out } => worker.record(policy, task, out),
+            Outgoing::View { policy, task, out } => worker.view(policy, task, out),
         }
     }
 }

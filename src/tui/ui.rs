@@ -126,7 +126,7 @@ pub fn panel_keys(panel: Panel) -> &'static str {
         Panel::Masks => "n network",
         Panel::Matrix => "↑↓ select step  e evaluate",
         Panel::Controls => "↑↓ row  ←→ change  enter toggle  a add task",
-        Panel::Robot => "v record for Foxglove (3D)",
+        Panel::Robot => "v Rerun 3D view",
     }
 }
 

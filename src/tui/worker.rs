@@ -254,21 +254,29 @@ impl Worker {
         self.robot_handle = Some(handle);
     }
 
-    /// Records 20 s of `task` under `policy` into `out` (MCAP) on a thread of its own.
-    pub fn record(&mut self, policy: PathBuf, task: String, out: PathBuf) {
+    /// Shows 20 s of `task` under `policy` in the Rerun viewer (started, or the one already
+    /// running) and saves the same stream to `out` (`.rrd`), on a thread of its own. Without a
+    /// viewer the recording goes to `out` only, and the message says how to open it.
+    pub fn view(&mut self, policy: PathBuf, task: String, out: PathBuf) {
+        use crate::record::{record_episodes, view_policy, RecordOptions, RerunSink};
         let tx = self.sender.clone();
         let handle = std::thread::spawn(move || {
-            let options =
-                crate::record::RecordOptions { seconds: 20.0, episodes: None, command: None, seed: 1, force: true };
-            let made = out.parent().map_or(Ok(()), std::fs::create_dir_all);
-            let message = match made
-                .map_err(anyhow::Error::from)
-                .and_then(|()| crate::record::record_episodes(&policy, &task, &out, &options))
-            {
+            let options = RecordOptions { seconds: 20.0, episodes: None, command: None, seed: 1, force: true };
+            let made = out.parent().map_or(Ok(()), std::fs::create_dir_all).map_err(anyhow::Error::from);
+            let sinks = [RerunSink::Spawn, RerunSink::Save(out.clone())];
+            let message = match made.and_then(|()| view_policy(&policy, &task, &sinks, &options)) {
                 Ok(s) => {
-                    format!("recorded {:.0} s of {task} to {} (open it in Foxglove)", s.sim_seconds, out.display())
+                    format!("showed {:.0} s of {task} in the Rerun viewer; saved to {}", s.sim_seconds, out.display())
                 }
-                Err(e) => format!("recording {task} failed: {e:#}"),
+                Err(live) => match record_episodes(&policy, &task, &out, &options) {
+                    Ok(s) => format!(
+                        "no Rerun viewer ({live:#}); saved {:.0} s of {task} to {}: open it with `rerun {}`",
+                        s.sim_seconds,
+                        out.display(),
+                        out.display()
+                    ),
+                    Err(e) => format!("recording {task} failed: {e:#}"),
+                },
             };
             let _ = tx.send(WorkerMsg::Recorded { task, message });
         });

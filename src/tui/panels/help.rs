@@ -22,7 +22,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("n", "masks: next network (actor, critic, CENet, ...)"),
     ("← → enter", "next task: change the row (switch, mode, related task)"),
     ("a", "next task: type a task to add at the end (e.g. invert:RR+noise:FR)"),
-    ("v", "3D: Rerun is not built yet, so 20 s of the task are recorded as MCAP (Foxglove)"),
+    ("v", "3D: 20 s of the task in the Rerun viewer (started if needed), saved as .rrd"),
 ];
 
 pub fn draw(f: &mut Frame, area: Rect) {

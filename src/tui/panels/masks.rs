@@ -15,18 +15,6 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
 use ratatui::Frame;
 
-/// The colour of each element view (the same in the legend).
-pub fn view_color(v: ElementView) -> (u8, u8, u8) {
-    match v {
-        ElementView::Vacant => (48, 48, 48),
-        ElementView::OccupiedByOthers => (70, 110, 200),
-        ElementView::PrivateToOthers => (150, 80, 200),
-        ElementView::SelectedFromVacant => (60, 210, 90),
-        ElementView::SelectedFromOccupied => (235, 195, 50),
-        ElementView::PrivateToTask => (235, 80, 60),
-    }
-}
-
 /// The heatmap's pixels: at most `height` rows of `width` (never more than the layer has
 /// elements), each the count of every view in the block of elements it covers (indexed
 /// by code). The longer side of the layer runs across.
@@ -60,7 +48,7 @@ pub fn mix(counts: &[u32; 6]) -> Color {
     let total = counts.iter().sum::<u32>().max(1) as f32;
     let mut rgb = [0.0f32; 3];
     for (v, n) in ElementView::ALL.iter().zip(counts) {
-        let (r, g, b) = view_color(*v);
+        let (r, g, b) = v.rgb();
         for (acc, c) in rgb.iter_mut().zip([r, g, b]) {
             *acc += c as f32 * *n as f32 / total;
         }
@@ -133,7 +121,7 @@ fn legend() -> [Line<'static>; 2] {
     let line = |views: &[ElementView]| {
         let mut spans = Vec::new();
         for v in views {
-            let (r, g, b) = view_color(*v);
+            let (r, g, b) = v.rgb();
             spans.push(Span::styled("■ ", Style::new().fg(Color::Rgb(r, g, b))));
             spans.push(Span::raw(format!("{:<24}", v.label())));
         }
@@ -253,10 +241,10 @@ mod tests {
         let full = heat_pixels(&view, 10, 10);
         assert_eq!((full.len(), full[0].len()), (2, 4), "never more pixels than elements");
         assert_eq!(full[1][3], [0, 1, 0, 0, 0, 0]);
-        let (r, g, b) = view_color(ElementView::SelectedFromVacant);
+        let (r, g, b) = ElementView::SelectedFromVacant.rgb();
         assert_eq!(mix(&px[0][0]), Color::Rgb(r, g, b));
-        let (vr, _, _) = view_color(ElementView::Vacant);
-        let (or, _, _) = view_color(ElementView::OccupiedByOthers);
+        let (vr, _, _) = ElementView::Vacant.rgb();
+        let (or, _, _) = ElementView::OccupiedByOthers.rgb();
         let Color::Rgb(red, _, _) = mix(&px[0][1]) else { panic!("an RGB colour") };
         assert_eq!(red, ((3.0 * vr as f32 + or as f32) / 4.0).round() as u8, "3 vacant to 1 occupied");
     }

@@ -64,7 +64,7 @@ fn view<'a>(
 
 pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
     let task = app.robot.task.clone().unwrap_or_default();
-    let outer = block(&format!("Robot: {task} (v: record it for Foxglove)"), focused);
+    let outer = block(&format!("Robot: {task} (v: in Rerun 3D)"), focused);
     let inner = outer.inner(area);
     f.render_widget(outer, area);
     let Some(frame) = &app.robot.frame else {
