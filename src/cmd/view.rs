@@ -45,7 +45,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
         .iter()
         .map(|s| match s {
             RerunSink::Connect(url) => format!("the viewer at {url}"),
-            RerunSink::Spawn => "a new viewer".to_string(),
+            RerunSink::Spawn => "the viewer on this machine (started if none was running)".to_string(),
             RerunSink::Save(path) => path.display().to_string(),
         })
         .collect();

@@ -161,17 +161,49 @@ fn connect(url: &str) -> anyhow::Result<GrpcSink> {
     }
 }
 
-/// Starts the `rerun` viewer from PATH listening on its default port (or finds the one
-/// already there); the port.
+/// How long a started viewer has to open its port.
+const SPAWN_WAIT: Duration = Duration::from_secs(10);
+
+/// The port of a viewer on this machine: one already listening on the viewer's default port, or
+/// one started from PATH (`rerun --port P --expect-data-soon`, its output discarded so that it
+/// cannot draw over the workbench, in its own process group so that it outlives us).
 fn spawn_viewer() -> anyhow::Result<u16> {
-    let spawned = ::rerun::spawn(&::rerun::SpawnOptions::default()).map_err(|e| match e {
-        ::rerun::SpawnError::ExecutableNotFoundInPath { .. } => anyhow::anyhow!(
-            "--spawn: no `rerun` viewer on PATH (to install it: {VIEWER_INSTALL}), \
-             or record to a file with --save FILE.rrd and open that later"
-        ),
-        other => anyhow::anyhow!("--spawn: starting the Rerun viewer failed: {other}"),
-    })?;
-    Ok(spawned.port)
+    let port = ::rerun::DEFAULT_SERVER_PORT;
+    let address = std::net::SocketAddr::from(([127, 0, 0, 1], port));
+    let listening = || std::net::TcpStream::connect_timeout(&address, Duration::from_millis(200)).is_ok();
+    if listening() {
+        return Ok(port);
+    }
+    let exe = std::env::var_os("PATH")
+        .and_then(|paths| std::env::split_paths(&paths).map(|d| d.join("rerun")).find(|p| p.is_file()))
+        .with_context(|| {
+            format!(
+                "--spawn: no `rerun` viewer on PATH (to install it: {VIEWER_INSTALL}), \
+                 or record to a file with --save FILE.rrd and open that later"
+            )
+        })?;
+    let mut command = std::process::Command::new(&exe);
+    command
+        .args([format!("--port={port}"), "--expect-data-soon".to_string()])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null());
+    #[cfg(unix)]
+    std::os::unix::process::CommandExt::process_group(&mut command, 0);
+    command.spawn().with_context(|| format!("--spawn: starting {}", exe.display()))?;
+    let start = Instant::now();
+    while start.elapsed() < SPAWN_WAIT {
+        if listening() {
+            return Ok(port);
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    anyhow::bail!(
+        "--spawn: {} started but opened no port {port} within {} s (no display?); \
+         record to a file with --save FILE.rrd and open that later",
+        exe.display(),
+        SPAWN_WAIT.as_secs()
+    )
 }
 
 /// `v` (a trunk-frame vector) in the world frame, for the trunk orientation `quat` (x, y, z, w).
