@@ -75,11 +75,7 @@ pub struct RecordSummary {
 /// (`.mcap` or `.rrd`).
 pub fn record_episodes(policy: &Path, task: &str, out: &Path, o: &RecordOptions) -> anyhow::Result<RecordSummary> {
     check_options(o)?;
-    anyhow::ensure!(
-        o.force || !out.exists(),
-        "{} exists: pass --force to replace it, or choose another --out",
-        out.display()
-    );
+    refuse_existing(out, o.force, "--out")?;
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
     let viewer = RobotViewer::new(policy, task, o.seed, o.command)?;
     let recorder = match ext {
@@ -99,17 +95,23 @@ pub fn view_policy(policy: &Path, task: &str, sinks: &[RerunSink], o: &RecordOpt
     check_options(o)?;
     for sink in sinks {
         if let RerunSink::Save(out) = sink {
-            anyhow::ensure!(
-                o.force || !out.exists(),
-                "{} exists: pass --force to replace it, or choose another --save",
-                out.display()
-            );
+            refuse_existing(out, o.force, "--save")?;
         }
     }
     let viewer = RobotViewer::new(policy, task, o.seed, o.command)?;
     let recorder = Recorder::rerun(sinks, viewer.env().robot(), &scene(&viewer, policy))?;
     let live = sinks.iter().any(|s| !matches!(s, RerunSink::Save(_)));
     run(viewer, recorder, o, live).with_context(|| format!("streaming {task} to Rerun"))
+}
+
+/// An existing `out` is kept unless `force`; `flag` names the option that chose it.
+fn refuse_existing(out: &Path, force: bool, flag: &str) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        force || !out.exists(),
+        "{} exists: pass --force to replace it, or choose another {flag}",
+        out.display()
+    );
+    Ok(())
 }
 
 fn check_options(o: &RecordOptions) -> anyhow::Result<()> {

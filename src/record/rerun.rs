@@ -64,6 +64,8 @@ struct RerunWriter {
     file: Option<(PathBuf, PathBuf)>,
     /// Whether a live viewer is among the sinks.
     live: bool,
+    /// The implicit frame of the entity tree's root: the floating base's parent.
+    world_frame: ::rerun::components::TransformFrameId,
     /// When the shown push arrow is cleared.
     push_until: Option<f64>,
     error: Option<anyhow::Error>,
@@ -113,7 +115,8 @@ impl Recorder {
         ] {
             rec.log_static(entity, &::rerun::SeriesLines::new().with_names(names))?;
         }
-        let writer = RerunWriter { rec, robot: rerun_robot, file, live, push_until: None, error: None };
+        let world_frame = ::rerun::components::TransformFrameId::from_entity_path(&::rerun::EntityPath::root());
+        let writer = RerunWriter { rec, robot: rerun_robot, file, live, world_frame, push_until: None, error: None };
         Ok(Recorder::start(writer, "Rerun"))
     }
 }
@@ -217,13 +220,12 @@ impl RerunWriter {
         let rec = &self.rec;
         rec.set_duration_secs(TIMELINE, s.t);
         let trunk = s.links[0];
-        let origin = ::rerun::components::TransformFrameId::from_entity_path(&::rerun::EntityPath::root());
         rec.log(
             "transforms",
             &::rerun::Transform3D::update_fields()
                 .with_translation(trunk.translation)
                 .with_quaternion(trunk.rotation)
-                .with_parent_frame(origin)
+                .with_parent_frame(self.world_frame.clone())
                 .with_child_frame(self.robot.root_frame.as_str()),
         )?;
         for (joint, q) in self.robot.leg_joints.iter().zip(s.q) {
