@@ -20,7 +20,7 @@ use rand::{Rng, SeedableRng};
 
 fn param(name: &str, values: &[f32]) -> Param {
     let var = Var::from_tensor(&Tensor::new(values, &Device::Cpu).unwrap()).unwrap();
-    Param { name: name.into(), var, update_mask: None }
+    Param::free(name, &var)
 }
 
 fn grad_of(loss: &Tensor, p: &Param) -> Vec<f32> {

@@ -23,7 +23,7 @@ fn the_default_sequence_has_every_single_leg_task_once() {
         .collect();
     expected.sort();
     assert_eq!(names, expected);
-    let four = scene("sequence-a1-4.toml");
+    let four = scene("sequence-a1-4-adapter.toml");
     assert_eq!(four.sequence.distinct_tasks(), cfg.sequence.distinct_tasks()[..4].to_vec(), "its first four tasks");
     assert_eq!(four.config, cfg.config, "the same experiment settings");
     assert_eq!((four.switches, four.run.base_policy), (cfg.switches, cfg.run.base_policy), "the same method and base");

@@ -1,11 +1,13 @@
 //! The switches for the method's unlabelled interpretations (issue 13 item 1),
 //! on real masked layers: with `score_grad_occupied` off only vacant elements'
 //! scores train; with `bias_start = "zero"` a task with related tasks starts
-//! from a zero bias, as a task without any does.
+//! from a zero bias, as a task without any does; with `entropy_target =
+//! "action"` the entropy phase leaves the soft scores alone and hands beta_H to
+//! the learner's action-entropy bonus for the first E iterations of a new task.
 
 mod nn_common;
 use nn_common::train_steps;
-use quadcl::nn::{Activation, BiasStart, ElementState, MaskConfig, MaskedMlp};
+use quadcl::nn::{Activation, BiasStart, ElementState, EntropyTarget, MaskConfig, MaskedMlp};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -68,5 +70,28 @@ fn a_zero_bias_start_ignores_the_related_tasks_biases() {
                 assert_eq!(bias, related, "{}: the related task's bias", l.name());
             }
         }
+    }
+}
+
+#[test]
+fn an_entropy_term_on_the_action_leaves_the_soft_scores_and_acts_for_e_iterations() {
+    for target in [EntropyTarget::SoftScores, EntropyTarget::Action] {
+        let cfg = MaskConfig { entropy_target: target, entropy_iterations: 3, entropy_weight: 0.02, ..MaskConfig::default() };
+        let mut net = first_task(&cfg);
+        start(&mut net, 1, &[], &cfg);
+        let on_action = target == EntropyTarget::Action;
+        for it in 0..5 {
+            net.begin_iteration(it, &mut ChaCha8Rng::seed_from_u64(it as u64)).unwrap();
+            let soft = net.soft_score_loss().unwrap().to_scalar::<f32>().unwrap();
+            let in_phase = it < 3;
+            assert_eq!(soft != 0.0, in_phase && !on_action, "{target:?} iteration {it}: soft-score term {soft}");
+            let expected = if in_phase && on_action { 0.02 } else { 0.0 };
+            assert_eq!(net.action_entropy_weight(), expected, "{target:?} iteration {it}");
+        }
+        net.end_task(&mut ChaCha8Rng::seed_from_u64(1)).unwrap();
+        // A finished task trained again (fine-tuning) has no entropy phase either way.
+        start(&mut net, 0, &[], &cfg);
+        net.begin_iteration(0, &mut ChaCha8Rng::seed_from_u64(0)).unwrap();
+        assert_eq!(net.action_entropy_weight(), 0.0, "{target:?}: a repeat");
     }
 }

@@ -5,7 +5,7 @@
 mod nn_common;
 use candle_core::Tensor;
 use nn_common::*;
-use quadcl::nn::{AdamConfig, ElementState, MaskConfig, MaskedAdam, MaskedMlp};
+use quadcl::nn::{AdamConfig, ElementState, MaskConfig, MaskedAdam, MaskedMlp, SigmaScale};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -95,14 +95,16 @@ fn scores_get_the_straight_through_gradient_even_where_unselected() {
 
 #[test]
 fn entropy_term_widens_sigma_then_sigma_decays_to_its_floor() {
-    let cfg = MaskConfig { entropy_iterations: 20, entropy_weight: 1.0, ..MaskConfig::default() };
+    // The layer trains ln sigma at its own fixed rate, which Adam moves by about that rate per
+    // step: with one step per iteration a large rate is needed to widen sigma visibly within
+    // E = 20 iterations.
+    let cfg =
+        MaskConfig { entropy_iterations: 20, entropy_weight: 1.0, sigma_learning_rate: 0.05, ..MaskConfig::default() };
     let (mut net, mut rng) = net_after(0, &cfg);
     net.begin_task(0, &[]).unwrap();
-    // The layer trains ln sigma, which Adam moves by about lr per step: with one step per
-    // iteration a large lr is needed to widen sigma visibly within E = 20 iterations.
-    let mut opt = MaskedAdam::new(AdamConfig { learning_rate: 0.05, ..AdamConfig::default() });
+    let mut opt = MaskedAdam::new(AdamConfig { learning_rate: 1e-3, ..AdamConfig::default() });
     let mut sigmas = Vec::new();
-    for it in 0..400 {
+    for it in 0..1000 {
         net.begin_iteration(it, &mut rng).unwrap();
         sigmas.push(net.layers()[0].sigma().unwrap());
         let params = net.params();
@@ -281,8 +283,10 @@ fn mask_churn_counts_the_selected_share_that_the_previous_draw_did_not_select() 
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     // sigma far below the spread of mu: the draw is nearly the ranking of mu; only
     // elements within about sigma of a row's k-th score can swap.
+    // In score units (`absolute`), so that sigma compares with the spread of mu.
     let still = MaskConfig {
         score_init_std: 1.0,
+        sigma_scale: SigmaScale::Absolute,
         sigma_init: 1e-3,
         sigma_floor: 1e-3,
         entropy: false,
@@ -297,8 +301,14 @@ fn mask_churn_counts_the_selected_share_that_the_previous_draw_did_not_select() 
     assert!(churn < 0.01, "a still mask churned {churn}");
 
     // sigma far above the spread of mu: every draw is a fresh random top-k, so about 1 - c of it is new.
-    let noisy =
-        MaskConfig { score_init_std: 1e-3, sigma_init: 0.05, sigma_max: 0.05, entropy: false, ..MaskConfig::default() };
+    let noisy = MaskConfig {
+        score_init_std: 1e-3,
+        sigma_scale: SigmaScale::Absolute,
+        sigma_init: 0.05,
+        sigma_max: 0.05,
+        entropy: false,
+        ..MaskConfig::default()
+    };
     let mut net = small_mlp(&noisy, 5);
     net.begin_task(0, &[]).unwrap();
     net.begin_iteration(0, &mut rng).unwrap();
@@ -315,6 +325,42 @@ fn mask_churn_counts_the_selected_share_that_the_previous_draw_did_not_select() 
     let per_layer: Vec<f64> = net.layers().iter().map(|l| l.mask_churn().unwrap()).collect();
     let (lo, hi) = per_layer.iter().fold((f64::MAX, f64::MIN), |(a, b), &c| (a.min(c), b.max(c)));
     assert!((lo..=hi).contains(&churn), "network churn {churn} outside its layers' {per_layer:?}");
+}
+
+/// Under `sigma_scale = "score_gap"` sigma is measured in each row's score gap at the cut, so
+/// the same sigma redraws about the same share of the mask whatever the scores' spread, and a
+/// larger sigma redraws more; in score units the same sigma does nothing to widely spread scores.
+#[test]
+fn in_score_gap_units_the_churn_follows_sigma_not_the_scores_spread() {
+    let churn = |score_init_std: f64, sigma: f64, sigma_scale: SigmaScale| -> f64 {
+        let cfg = MaskConfig {
+            score_init_std,
+            sigma_scale,
+            sigma_init: sigma,
+            sigma_floor: sigma.min(1e-3),
+            sigma_max: sigma.max(1.0),
+            entropy: false,
+            ..MaskConfig::default()
+        };
+        let mut net = small_mlp(&cfg, 5);
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        net.begin_task(0, &[]).unwrap();
+        // The mean churn of 20 redraws of the same scores (nothing trains in between).
+        (0..21)
+            .filter_map(|it| {
+                net.begin_iteration(it, &mut rng).unwrap();
+                net.mask_churn()
+            })
+            .sum::<f64>()
+            / 20.0
+    };
+    let (narrow, wide) = (churn(1e-3, 1.0, SigmaScale::ScoreGap), churn(1.0, 1.0, SigmaScale::ScoreGap));
+    assert!(narrow > 0.02 && wide > 0.02, "sigma 1 gap redraws part of the mask: {narrow}, {wide}");
+    assert!((narrow / wide - 1.0).abs() < 0.35, "the spread of the scores changed the churn: {narrow} vs {wide}");
+    let small = churn(1.0, 0.1, SigmaScale::ScoreGap);
+    assert!(small < 0.5 * wide, "sigma 0.1 gap churned {small}, sigma 1 gap {wide}");
+    let absolute = churn(1.0, 1e-3, SigmaScale::Absolute);
+    assert!(absolute < 0.5 * small, "sigma 1e-3 in score units churned {absolute} of spread-1 scores");
 }
 
 #[test]

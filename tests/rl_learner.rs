@@ -32,6 +32,9 @@ fn one_iteration_reports_every_namespaced_metric() {
         "losses/cenet_kl",
         "time/env_s",
         "time/update_s",
+        "charts/sigma/actor.l0",
+        "charts/score_gap/critic.l2",
+        "charts/sigma/cenet_encoder.l0",
     ] {
         let v = metrics[0].get(key).unwrap_or_else(|| panic!("missing {key}: {:?}", metrics[0].keys()));
         assert!(v.is_finite(), "{key} = {v}");
@@ -122,4 +125,22 @@ fn frozen_acting_weights_give_the_training_forwards_numbers_bit_for_bit() {
             agent.end_task(&mut rand_chacha::ChaCha8Rng::seed_from_u64(6)).unwrap();
         }
     }
+}
+
+/// With `entropy_target = "action"` the method's beta_H joins PPO's entropy bonus in a task's
+/// first E iterations: the policy's action std grows where the soft-score reading leaves it.
+#[test]
+fn an_entropy_term_on_the_action_widens_the_policys_action_distribution() {
+    let action_std = |target: quadcl::nn::EntropyTarget| -> f64 {
+        let mut cfg = small_ppo_config();
+        cfg.net.mask.entropy_target = target;
+        cfg.net.mask.entropy_weight = 1.0;
+        cfg.net.mask.entropy_iterations = 4;
+        let metrics = run(&cfg, 4, 3);
+        assert!(metrics.iter().all(|m| (m["losses/soft_score"] == 0.0) == (target == quadcl::nn::EntropyTarget::Action)));
+        metrics[3]["charts/action_std"]
+    };
+    let (on_scores, on_action) =
+        (action_std(quadcl::nn::EntropyTarget::SoftScores), action_std(quadcl::nn::EntropyTarget::Action));
+    assert!(on_action > on_scores * 1.02, "action std {on_action} with the term on the action, {on_scores} without");
 }

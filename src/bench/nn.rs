@@ -62,8 +62,8 @@ impl DenseMlp {
             .enumerate()
             .flat_map(|(i, (w, b))| {
                 [
-                    Param { name: format!("l{i}.weight"), var: w.clone(), update_mask: None },
-                    Param { name: format!("l{i}.bias"), var: b.clone(), update_mask: None },
+                    Param::free(format!("l{i}.weight"), w),
+                    Param::free(format!("l{i}.bias"), b),
                 ]
             })
             .collect()

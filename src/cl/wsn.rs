@@ -14,7 +14,7 @@
 
 use super::method::ContinualMethod;
 use super::ours::{LambdaMode, Switches};
-use crate::config::net::MaskConfig;
+use crate::config::net::{MaskConfig, SigmaScale};
 
 /// The method `wsn`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -44,6 +44,8 @@ impl ContinualMethod for Wsn {
         _iterations: usize,
     ) -> anyhow::Result<MaskConfig> {
         let mut m = wsn_switches(switches).apply(base)?;
+        // WSN draws no noise: sigma is a tie-break in score units, as before issue 13.
+        m.sigma_scale = SigmaScale::Absolute;
         m.sigma_init = WSN_SIGMA;
         m.sigma_floor = m.sigma_floor.min(WSN_SIGMA);
         m.entropy_iterations = 0;

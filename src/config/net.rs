@@ -59,6 +59,38 @@ pub enum BiasStart {
     Zero,
 }
 
+/// What the soft-score sigma is measured in (METHOD.md 2.3; the scale is ours, the paper gives none).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SigmaScale {
+    /// Score units: S = mu + sigma * eps. With the score means spread 0.3 a sigma of 0.005-0.05
+    /// moves almost no element across the top-k cut (the runs before issue 13 used this).
+    Absolute,
+    /// Units of the score spread at each row's top-k cut: S = mu + sigma * g_row * eps, where
+    /// g_row is half the distance between the scores ranked k - w and k + w + 1 among the row's
+    /// selectable elements (w = max(1, round(k / 10)); the whole layer for `per-layer`), taken
+    /// from mu at every iteration. At sigma 1 a score at the cut moves about w ranks per standard
+    /// deviation, whatever the scores' spread, so the entropy term changes the selection.
+    #[default]
+    ScoreGap,
+}
+
+/// Which distribution the plasticity entropy term of the first E iterations acts on (METHOD.md
+/// 2.3 says the soft scores; the paper's Figure 8 caption says "of the action").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EntropyTarget {
+    /// -beta_H * H(soft scores), H = sum 0.5 ln(2 pi e sigma^2): widens sigma, so the sampled
+    /// masks explore which weights to use.
+    #[default]
+    SoftScores,
+    /// -beta_H * H(action distribution), added to PPO's own entropy bonus for the first E
+    /// iterations of each new task (the toy learner has no action distribution: no term).
+    /// H(action) has one term per action dimension, not one per weight: beta_H needs to be
+    /// about 1e-2 here where 1e-4 acts on the soft scores.
+    Action,
+}
+
 /// The masked-layer settings of the method (METHOD.md 2.1 to 2.6).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -76,11 +108,21 @@ pub struct MaskConfig {
     /// 0.01 a PPO run redraws 37 % of its selected weights every iteration
     /// (`charts/mask_churn_actor`), at 0.3 about 2-3 %.
     pub score_init_std: f64,
-    /// Initial soft-score sigma (one per layer) at the start of every task, in sigma units
-    /// (the layer trains ln sigma, so sigma stays > 0 whatever the optimiser does).
+    /// What sigma, sigma_init, sigma_floor and sigma_max are measured in: `score_gap` (the
+    /// scores' spread at each row's top-k cut) or `absolute` (score units).
+    pub sigma_scale: SigmaScale,
+    /// Initial soft-score sigma (one per layer) at the start of every task, in `sigma_scale`
+    /// units (the layer trains ln sigma, so sigma stays > 0 whatever the optimiser does).
     pub sigma_init: f64,
-    /// Whether the entropy term -beta_H * H on sigma is used (METHOD.md 2.3).
+    /// Adam's learning rate for ln sigma, fixed (the paper: Adam 1e-3 for the soft networks);
+    /// 0: the PPO optimiser's rate, which the KL adaptation drives (about 2e-4 in the base run).
+    /// Adam moves ln sigma by about its rate per step whatever beta_H is, so this rate and E
+    /// decide how far the entropy term widens sigma.
+    pub sigma_learning_rate: f64,
+    /// Whether the entropy term -beta_H * H is used (METHOD.md 2.3).
     pub entropy: bool,
+    /// What the entropy term acts on: `soft_scores` (METHOD.md 2.3) or `action` (Figure 8's caption).
+    pub entropy_target: EntropyTarget,
     /// beta_H, the weight of the entropy term.
     pub entropy_weight: f64,
     /// E: the number of iterations of each task during which the entropy term is on.
@@ -131,13 +173,16 @@ impl Default for MaskConfig {
             private_share: 0.02,
             rule: SelectionRule::Split,
             score_init_std: 0.3,
-            sigma_init: 0.005,
+            sigma_scale: SigmaScale::ScoreGap,
+            sigma_init: 0.5,
+            sigma_learning_rate: 1e-3,
             entropy: true,
+            entropy_target: EntropyTarget::SoftScores,
             entropy_weight: 1e-4,
             entropy_iterations: 100,
             sigma_decay: 0.99,
             sigma_floor: 1e-3,
-            sigma_max: 0.05,
+            sigma_max: 4.0,
             reinit: true,
             reinit_scale: 1.0,
             transfer_bonus: 3.0,
@@ -190,6 +235,11 @@ impl MaskConfig {
             "net.mask.sigma_max ({}) must be >= sigma_floor ({})",
             self.sigma_max,
             self.sigma_floor
+        );
+        anyhow::ensure!(
+            self.sigma_learning_rate.is_finite() && (0.0..=1.0).contains(&self.sigma_learning_rate),
+            "net.mask.sigma_learning_rate = {}: expected a value in [0, 1] (0: the PPO optimiser's rate)",
+            self.sigma_learning_rate
         );
         anyhow::ensure!(
             self.entropy_weight.is_finite() && self.entropy_weight >= 0.0,
@@ -343,6 +393,8 @@ mod tests {
             ("transfer_bonus", MaskConfig { transfer_bonus: f64::INFINITY, ..MaskConfig::default() }),
             ("score_init_std", MaskConfig { score_init_std: f64::INFINITY, ..MaskConfig::default() }),
             ("reinit_scale", MaskConfig { reinit_scale: 1.5, ..MaskConfig::default() }),
+            ("sigma_learning_rate", MaskConfig { sigma_learning_rate: -1e-3, ..MaskConfig::default() }),
+            ("sigma_learning_rate", MaskConfig { sigma_learning_rate: f64::NAN, ..MaskConfig::default() }),
         ] {
             let err = cfg.validate().unwrap_err().to_string();
             assert!(err.contains(key), "{key}: {err}");

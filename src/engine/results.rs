@@ -7,6 +7,7 @@ use crate::cl::{forward_transfer, EvalMatrix, Switches};
 use crate::nn::TaskId;
 use crate::rl::{metric_names, Metrics};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// One training step as it ran.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -82,6 +83,14 @@ pub struct TaskCurve {
     /// (absent from runs written before it was recorded).
     #[serde(default)]
     pub fall_rate: Vec<f64>,
+    /// Per masked layer, its soft-score sigma each iteration (`charts/sigma/LAYER`, in the
+    /// run's `sigma_scale` units): the entropy phase's first E iterations widen it.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub sigma: BTreeMap<String, Vec<f64>>,
+    /// Per masked layer, its mask churn from the second iteration on (`charts/mask_churn/LAYER`):
+    /// how much of the hard mask each iteration redrew.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub mask_churn: BTreeMap<String, Vec<f64>>,
 }
 
 impl TaskCurve {
@@ -97,6 +106,14 @@ impl TaskCurve {
         put(&mut self.lin_vel_err, metric_names::LIN_VEL_ERR);
         put(&mut self.ang_vel_err, metric_names::ANG_VEL_ERR);
         put(&mut self.fall_rate, metric_names::FALL_RATE);
+        for (key, value) in m.iter().filter(|(_, v)| v.is_finite()) {
+            let per_layer = |prefix: &str| key.strip_prefix(prefix).and_then(|k| k.strip_prefix('/'));
+            if let Some(layer) = per_layer(metric_names::SIGMA) {
+                self.sigma.entry(layer.to_string()).or_default().push(*value);
+            } else if let Some(layer) = per_layer(metric_names::MASK_CHURN) {
+                self.mask_churn.entry(layer.to_string()).or_default().push(*value);
+            }
+        }
     }
 }
 

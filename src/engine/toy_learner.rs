@@ -14,7 +14,7 @@ use crate::nn::{
     checkpoint, mask_report, mask_views, transfer_lift, AdamConfig, DenseMlp, LayerLift, LayerView, MaskReport,
     MaskedAdam, MaskedMlp, Network, NetworkKind, TaskId,
 };
-use crate::rl::{apply_hooks, metric_names, EvalReport, Metrics, NoHooks, OutputSample, PolicyProbe, UpdateHooks};
+use crate::rl::{apply_hooks, layer_metrics, metric_names, EvalReport, Metrics, NoHooks, OutputSample, PolicyProbe, UpdateHooks};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use rand::{Rng, SeedableRng};
@@ -108,6 +108,7 @@ impl Learner for ToyLearner {
         let (_, a) = self.current.as_ref().context("train_iteration without begin_task")?;
         let a = a.clone();
         self.net.begin_iteration(self.iteration, &mut self.rng)?;
+        let layers = layer_metrics(&self.net.layer_stats()?);
         let x = inputs(&mut self.rng, BATCH);
         let y = targets(&a, &x);
         let xt = Tensor::from_vec(x, (BATCH, IN), &Device::Cpu)?;
@@ -121,6 +122,7 @@ impl Learner for ToyLearner {
         self.hooks.after_step(&params)?;
         self.iteration += 1;
         let mse = f64::from(mse.to_scalar::<f32>()?);
+        m.extend(layers);
         m.insert("losses/mse".into(), mse);
         m.insert(metric_names::PERFORMANCE.into(), 1.0 / (1.0 + mse));
         m.insert(metric_names::EPISODIC_RETURN.into(), -mse);

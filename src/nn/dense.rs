@@ -282,7 +282,7 @@ impl DenseMlp {
     /// Every trainable variable: the trunk, then the head of the task in progress (none between tasks).
     pub fn params(&self) -> Vec<Param> {
         let Some(head) = self.current.and_then(|t| self.heads.get(&t)) else { return Vec::new() };
-        let p = |name: String, var: &Var| Param { name, var: var.clone(), update_mask: None };
+        let p = |name: String, var: &Var| Param::free(name, var);
         let mut out = Vec::with_capacity(2 * self.sizes.len());
         for (i, l) in self.trunk.iter().enumerate() {
             out.push(p(format!("{}.l{i}.weight", self.name), &l.weight));

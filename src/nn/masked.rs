@@ -18,7 +18,9 @@
 //! dL/dmu = dL/dM = dL/dWeff * W for every element (straight-through);
 //! dL/dlog_sigma = sigma * sum(dL/dM * eps). Which elements may actually move is the
 //! optimiser's update mask: W where selected AND vacant, mu where selectable,
-//! log_sigma only during the first E iterations (after that it decays, 2.3).
+//! log_sigma only during the first E iterations (after that it decays, 2.3), at its own
+//! fixed learning rate (`sigma_learning_rate`). Under `sigma_scale = "score_gap"` sigma
+//! is in units of each row's score gap at the top-k cut (`masked/score_gap.rs`).
 
 use super::bitmask::BitMask;
 use super::masked_weight::masked_weight;
@@ -27,13 +29,17 @@ use super::state::{ElementState, TaskId};
 use super::Param;
 use crate::config::net::{BiasStart, MaskConfig, SelectionRule};
 use anyhow::Context;
-use candle_core::{DType, Device, Tensor, Var};
+use candle_core::{Device, Tensor, Var};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal, Uniform};
 use std::collections::BTreeMap;
 
 mod baselines;
+mod entropy;
 mod iteration;
+mod score_gap;
+
+pub use iteration::LayerIteration;
 
 /// The task being trained and its per-iteration tensors.
 #[derive(Debug, Clone)]
@@ -53,6 +59,8 @@ pub(crate) struct Training {
     pub previous_selection: Option<Vec<bool>>,
     /// Fraction of this iteration's selected elements that the previous iteration had not selected.
     pub mask_churn: Option<f64>,
+    /// The rows' mean score gap at the cut this iteration (`sigma_scale = "score_gap"`).
+    pub score_gap: Option<f64>,
 }
 
 impl Training {
@@ -69,6 +77,7 @@ impl Training {
             score_update: None,
             previous_selection: None,
             mask_churn: None,
+            score_gap: None,
         }
     }
 }
@@ -336,21 +345,6 @@ impl MaskedLinear {
         Ok(x.matmul(&eff.t()?)?.broadcast_add(&bias)?)
     }
 
-    /// -beta_H * H with H = sum over the layer's scores of 0.5 ln(2 pi e sigma^2)
-    /// = n * (log_sigma + 0.5 ln(2 pi e)) (2.3); 0 when off or after E iterations.
-    /// Finite for every finite log_sigma; its gradient on log_sigma is the constant -beta_H * n.
-    pub fn soft_score_loss(&self) -> anyhow::Result<Tensor> {
-        match &self.training {
-            Some(t) if !t.repeat && self.cfg.entropy && t.iteration < self.cfg.entropy_iterations => {
-                let n = (self.out_dim * self.in_dim) as f64;
-                let h = ((self.log_sigma.as_tensor() * n)?
-                    + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
-                Ok((h * -self.cfg.entropy_weight)?.sum_all()?)
-            }
-            _ => Ok(Tensor::zeros((), DType::F32, &Device::Cpu)?),
-        }
-    }
-
     /// Trainable variables with their update masks: weight, score, log_sigma (named "{layer}.log_sigma"),
     /// bias (a repeat: weight and bias only).
     pub fn parameters(&self) -> Vec<Param> {
@@ -359,12 +353,15 @@ impl MaskedLinear {
             name: format!("{}.{suffix}", self.name),
             var: var.clone(),
             update_mask: m.cloned(),
+            fixed_learning_rate: None,
         };
         let mut out = vec![p("weight", &self.weight, t.weight_update.as_ref())];
         if !t.repeat {
             out.push(p("score", &self.score_mean, t.score_update.as_ref()));
             if t.iteration < self.cfg.entropy_iterations {
-                out.push(p("log_sigma", &self.log_sigma, None));
+                let rate = self.cfg.sigma_learning_rate;
+                let fixed_learning_rate = (rate > 0.0).then_some(rate);
+                out.push(Param { fixed_learning_rate, ..p("log_sigma", &self.log_sigma, None) });
             }
         }
         out.push(p("bias", &t.bias, None));

@@ -7,7 +7,7 @@
 
 use super::activation::activate;
 use super::fused::fused_mlp_checked;
-use super::masked::MaskedLinear;
+use super::masked::{LayerIteration, MaskedLinear};
 use super::state::TaskId;
 use super::Param;
 use crate::config::net::{Activation, MaskConfig};
@@ -190,6 +190,24 @@ impl MaskedMlp {
             weight += n;
         }
         (weight > 0.0).then(|| sum / weight)
+    }
+
+    /// beta_H to add to the action-distribution entropy bonus this iteration (see
+    /// [`MaskedLinear::action_entropy_weight`]; every layer has the same settings).
+    pub fn action_entropy_weight(&self) -> f64 {
+        self.layers.iter().map(MaskedLinear::action_entropy_weight).fold(0.0, f64::max)
+    }
+
+    /// Each layer's soft-score statistics of the iteration (METHOD 2.3), by layer name
+    /// (layers outside a new task's training left out).
+    pub fn layer_stats(&self) -> anyhow::Result<Vec<(String, LayerIteration)>> {
+        let mut out = Vec::new();
+        for l in &self.layers {
+            if let Some(s) = l.iteration_stats()? {
+                out.push((l.name().to_string(), s));
+            }
+        }
+        Ok(out)
     }
 
     /// Every layer's (weight, bias) concatenated in layer order: the fused op's theta.

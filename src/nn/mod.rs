@@ -30,13 +30,13 @@ mod select;
 mod state;
 mod stats;
 
-pub use crate::config::net::{Activation, BiasStart, MaskConfig, NetworkKind, SelectionRule};
+pub use crate::config::net::{Activation, BiasStart, EntropyTarget, MaskConfig, NetworkKind, SelectionRule, SigmaScale};
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};
 pub use dense::{DenseLayer, DenseMlp};
 pub use element_view::{mask_views, transfer_lift, ElementView, LayerLift, LayerView};
 pub use fused::{fused_mlp, matmul};
-pub use masked::MaskedLinear;
+pub use masked::{LayerIteration, MaskedLinear};
 pub use mlp::{FrozenWeights, MaskedMlp};
 pub use network::{AsNetworkRef, IterationNoise, Network, NetworkRef};
 pub use optim::{AdamConfig, MaskedAdam};
@@ -53,4 +53,14 @@ pub struct Param {
     pub var: candle_core::Var,
     /// Same shape as `var`, 1.0 where the element may move; None = every element.
     pub update_mask: Option<candle_core::Tensor>,
+    /// Adam's learning rate for this variable, fixed: the optimiser's own rate (its schedule,
+    /// the KL adaptation) does not apply. None: the optimiser's rate.
+    pub fixed_learning_rate: Option<f64>,
+}
+
+impl Param {
+    /// A variable every element of which moves at the optimiser's rate.
+    pub fn free(name: impl Into<String>, var: &candle_core::Var) -> Self {
+        Self { name: name.into(), var: var.clone(), update_mask: None, fixed_learning_rate: None }
+    }
 }

@@ -7,6 +7,7 @@
 //! Shapes: x (batch, sizes[0]) -> (batch, sizes[last]) either way.
 
 use super::dense::DenseMlp;
+use super::masked::LayerIteration;
 use super::mlp::{FrozenWeights, MaskedMlp};
 use super::state::TaskId;
 use super::Param;
@@ -166,6 +167,17 @@ impl Network {
     /// Share of this iteration's selected elements new since the last (masked networks only).
     pub fn mask_churn(&self) -> Option<f64> {
         self.as_masked().and_then(MaskedMlp::mask_churn)
+    }
+
+    /// beta_H to add to the action-distribution entropy bonus this iteration (masked networks
+    /// with `entropy_target = "action"` in a new task's first E iterations; 0 otherwise).
+    pub fn action_entropy_weight(&self) -> f64 {
+        self.as_masked().map_or(0.0, MaskedMlp::action_entropy_weight)
+    }
+
+    /// Each masked layer's soft-score statistics of the iteration (none for a dense network).
+    pub fn layer_stats(&self) -> anyhow::Result<Vec<(String, LayerIteration)>> {
+        self.as_masked().map_or(Ok(Vec::new()), MaskedMlp::layer_stats)
     }
 
     /// Every trainable variable with its update mask.

@@ -129,7 +129,8 @@ impl MaskedAdam {
         Ok(norm)
     }
 
-    /// One Adam step on every parameter that has a gradient (the parameters in parallel).
+    /// One Adam step on every parameter that has a gradient (the parameters in parallel), each
+    /// at its [`Param::fixed_learning_rate`] where it has one, at the optimiser's rate otherwise.
     pub fn step(&mut self, params: &[Param], grads: &GradStore) -> anyhow::Result<()> {
         let c = self.cfg.clone();
         for p in params {
@@ -154,9 +155,10 @@ impl MaskedAdam {
             let mut w = var_values(&p.var)?;
             mom.step += 1;
             let (b1, b2) = (c.beta1 as f32, c.beta2 as f32);
-            let step_size = (c.learning_rate / (1.0 - c.beta1.powi(mom.step))) as f32;
+            let lr = p.fixed_learning_rate.unwrap_or(c.learning_rate);
+            let step_size = (lr / (1.0 - c.beta1.powi(mom.step))) as f32;
             let bc2_sqrt = (1.0 - c.beta2.powi(mom.step)).sqrt() as f32;
-            let (eps, decay) = (c.eps as f32, (c.learning_rate * c.weight_decay) as f32);
+            let (eps, decay) = (c.eps as f32, (lr * c.weight_decay) as f32);
             with_grad_and_mask(p, grads, |g, mask| -> anyhow::Result<()> {
                 anyhow::ensure!(
                     g.len() == w.len(),
@@ -217,6 +219,7 @@ mod tests {
                 name: "w".into(),
                 var: var.clone(),
                 update_mask: Some(Tensor::from_vec(m, (8, 8), &Device::Cpu).unwrap()),
+                fixed_learning_rate: None,
             };
             let loss = var.as_tensor().sqr().unwrap().sum_all().unwrap();
             let grads = loss.backward().unwrap();
@@ -236,9 +239,28 @@ mod tests {
     }
 
     #[test]
+    fn a_fixed_learning_rate_ignores_the_optimisers_rate() {
+        // Adam's first step moves every element by its learning rate (sign of the gradient).
+        let step = |fixed: Option<f64>, optimiser_lr: f64| {
+            let var = Var::from_slice(&[1.0f32, -2.0], 2, &Device::Cpu).unwrap();
+            let p = Param { fixed_learning_rate: fixed, ..Param::free("log_sigma", &var) };
+            let grads = var.as_tensor().sqr().unwrap().sum_all().unwrap().backward().unwrap();
+            let mut opt = MaskedAdam::new(AdamConfig { learning_rate: optimiser_lr, ..AdamConfig::default() });
+            opt.step(&[p], &grads).unwrap();
+            var_values(&var).unwrap()
+        };
+        for lr in [1e-4, 1e-2] {
+            let moved = step(Some(1e-3), lr);
+            assert!((moved[0] - (1.0 - 1e-3)).abs() < 1e-6 && (moved[1] - (-2.0 + 1e-3)).abs() < 1e-6, "{moved:?}");
+            let at_optimiser = step(None, lr);
+            assert!((at_optimiser[0] - (1.0 - lr as f32)).abs() < 1e-6, "{at_optimiser:?}");
+        }
+    }
+
+    #[test]
     fn clipping_scales_to_max_norm_and_reports_the_norm_before() {
         let var = Var::from_slice(&[3.0f32, 4.0], 2, &Device::Cpu).unwrap();
-        let p = Param { name: "w".into(), var: var.clone(), update_mask: None };
+        let p = Param::free("w", &var);
         let mut grads = (var.as_tensor().sqr().unwrap().sum_all().unwrap() * 0.5).unwrap().backward().unwrap();
         let opt = MaskedAdam::new(AdamConfig::default());
         let norm = opt.clip_grad_norm(std::slice::from_ref(&p), &mut grads, 1.0).unwrap();
@@ -251,7 +273,7 @@ mod tests {
     fn clipping_norm_counts_only_elements_that_may_move() {
         let var = Var::from_slice(&[3.0f32, 4.0, 100.0], 3, &Device::Cpu).unwrap();
         let mask = Tensor::from_slice(&[1.0f32, 1.0, 0.0], 3, &Device::Cpu).unwrap();
-        let p = Param { name: "w".into(), var: var.clone(), update_mask: Some(mask) };
+        let p = Param { update_mask: Some(mask), ..Param::free("w", &var) };
         let mut grads = (var.as_tensor().sqr().unwrap().sum_all().unwrap() * 0.5).unwrap().backward().unwrap();
         let norm =
             MaskedAdam::new(AdamConfig::default()).clip_grad_norm(std::slice::from_ref(&p), &mut grads, 10.0).unwrap();

@@ -284,7 +284,7 @@ impl Agent {
         if self.recall {
             return out; // nothing trains in recall mode
         }
-        out.push(Param { name: "log_std".into(), var: self.log_std.clone(), update_mask: None });
+        out.push(Param::free("log_std", &self.log_std));
         out
     }
 

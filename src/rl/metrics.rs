@@ -25,6 +25,30 @@ pub mod names {
     pub const ENV_STEPS: &str = "charts/env_steps";
     /// Envs reset in the iteration because their physics blew up (a non-finite state, a rapier failure).
     pub const PHYSICS_RESETS: &str = "charts/physics_resets";
+    /// Prefix of a masked layer's soft-score sigma, `charts/sigma/LAYER` (in `sigma_scale` units).
+    pub const SIGMA: &str = "charts/sigma";
+    /// Prefix of a masked layer's mean score gap at the top-k cut, `charts/score_gap/LAYER`.
+    pub const SCORE_GAP: &str = "charts/score_gap";
+    /// Prefix of a masked layer's mask churn, `charts/mask_churn/LAYER`: the share of the
+    /// iteration's hard mask that the previous iteration had not selected.
+    pub const MASK_CHURN: &str = "charts/mask_churn";
     /// Wall-clock seconds of the training run (or of the sequence step) so far.
     pub const WALL_S: &str = "time/wall_s";
+}
+
+/// Masked layers' soft-score statistics as metrics: `charts/sigma/LAYER`,
+/// `charts/score_gap/LAYER` (under `sigma_scale = "score_gap"`) and
+/// `charts/mask_churn/LAYER` (from a task's second iteration).
+pub fn layer_metrics(stats: &[(String, crate::nn::LayerIteration)]) -> Metrics {
+    let mut m = Metrics::new();
+    for (layer, s) in stats {
+        m.insert(format!("{}/{layer}", names::SIGMA), s.sigma);
+        if let Some(g) = s.score_gap {
+            m.insert(format!("{}/{layer}", names::SCORE_GAP), g);
+        }
+        if let Some(c) = s.mask_churn {
+            m.insert(format!("{}/{layer}", names::MASK_CHURN), c);
+        }
+    }
+    m
 }

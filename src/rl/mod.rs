@@ -52,7 +52,7 @@ pub use agent::Agent;
 pub use env::{EnvDims, EpisodeSummary, TrainEnv, VecStep};
 pub use evaluate::{evaluate, EvalReport};
 pub use gait::{record_gait, GaitReport, GaitSummary, HeldCommand};
-pub use metrics::{names as metric_names, Metrics};
+pub use metrics::{layer_metrics, names as metric_names, Metrics};
 pub use normalizer::RunningNormalizer;
 pub use policy_dir::{
     load_for_task, load_policy, load_policy_or_checkpoint, load_training_checkpoint, save_policy, LoadedPolicy,

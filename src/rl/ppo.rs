@@ -25,7 +25,7 @@ use super::losses::{
     adapt_learning_rate, clip_fraction, clipped_surrogate_loss, gaussian_entropy, gaussian_kl, gaussian_log_prob,
     normalize_advantages, value_loss,
 };
-use super::metrics::{names, Metrics};
+use super::metrics::{layer_metrics, names, Metrics};
 use super::rollout::{gather_rows, minibatch_indices, RolloutBuffer, RolloutDims, RolloutRow};
 use super::rollout_sample::{AgentProbe, RolloutSample};
 use super::update_hooks::{apply_hooks, NoHooks, UpdateHooks};
@@ -110,6 +110,9 @@ impl PpoLearner {
         }
         if let Some(churn) = self.agent.critic.mask_churn() {
             metrics.insert("charts/mask_churn_critic".into(), churn);
+        }
+        for net in [&self.agent.actor, &self.agent.critic, &self.agent.encoder, &self.agent.decoder] {
+            metrics.extend(layer_metrics(&net.layer_stats()?));
         }
         let rollout_s = start.elapsed().as_secs_f64();
         let update_start = Instant::now();
@@ -233,6 +236,9 @@ impl PpoLearner {
         let rollout_log_std =
             self.rollout_log_std.clone().ok_or_else(|| anyhow::anyhow!("update called before any rollout"))?;
         let cfg = &self.cfg;
+        // PPO's entropy bonus, plus beta_H in a new task's first E iterations when the
+        // method's entropy term acts on the action distribution (METHOD 2.3, Figure 8's reading).
+        let entropy_coef = cfg.entropy_coef + self.agent.actor.action_entropy_weight();
         let mut sums = Metrics::new();
         let mut count = 0.0;
         for _epoch in 0..cfg.epochs {
@@ -280,7 +286,7 @@ impl PpoLearner {
                     let entropy = gaussian_entropy(log_std)?;
                     // The masks' soft-score entropy term (METHOD 2.3; 0 after E iterations).
                     let soft_score = agent.actor.soft_score_loss()?;
-                    let loss = policy_loss.sub(&entropy.affine(cfg.entropy_coef, 0.0)?)?.add(&soft_score)?;
+                    let loss = policy_loss.sub(&entropy.affine(entropy_coef, 0.0)?)?.add(&soft_score)?;
                     let grads = loss.backward()?;
                     let clipfrac = f64::from(clip_fraction(&new_log_probs, &old_log_probs, cfg.clip_ratio)?);
                     Ok(ActorTerms { kl, policy_loss, entropy, soft_score, clipfrac, grads })

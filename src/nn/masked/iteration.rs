@@ -1,8 +1,11 @@
 //! The per-iteration part of a [`MaskedLinear`]'s life cycle (METHOD.md 2.1,
-//! 2.3): draw S = mu + sigma * eps, choose the hard mask, set the update masks,
-//! decay sigma after E iterations, and measure the mask churn.
+//! 2.3): draw S = mu + sigma * eps (eps scaled per row by the score gap at the
+//! cut under `sigma_scale = "score_gap"`, `score_gap.rs`), choose the hard mask,
+//! set the update masks, decay sigma after E iterations, and measure the mask churn.
 
+use super::score_gap::score_gaps;
 use super::{mask_tensor, set_var, var_values, MaskedLinear};
+use crate::config::net::SigmaScale;
 use crate::nn::select::select_mask;
 use crate::nn::state::ElementState;
 use anyhow::Context;
@@ -69,8 +72,18 @@ impl MaskedLinear {
         set_var(&self.log_sigma, vec![log_sigma])?;
         let sigma = log_sigma.exp();
         let mu = var_values(&self.score_mean)?;
-        let eps = noise.with_context(|| format!("{}: no noise drawn for the iteration", self.name))?;
+        let mut eps = noise.with_context(|| format!("{}: no noise drawn for the iteration", self.name))?;
         anyhow::ensure!(eps.len() == n, "{}: {} noise values for {n} elements", self.name, eps.len());
+        // In score-gap units each row's noise is eps * g_row: the stored noise is the scaled
+        // one, so the straight-through gradient of ln sigma (sigma * sum dL/dM * noise) stays exact.
+        t.score_gap = match self.cfg.sigma_scale {
+            SigmaScale::Absolute => None,
+            SigmaScale::ScoreGap => {
+                let gaps = score_gaps(&mu, &self.states, out_dim, in_dim, t.task, &params);
+                eps.chunks_mut(in_dim).zip(&gaps).for_each(|(row, g)| row.iter_mut().for_each(|e| *e *= g));
+                Some(gaps.iter().map(|g| f64::from(*g)).sum::<f64>() / out_dim as f64)
+            }
+        };
         let sample: Vec<f32> = mu.iter().zip(&eps).map(|(m, e)| m + sigma * e).collect();
         let selected = select_mask(&sample, &self.states, out_dim, in_dim, t.task, &params);
         t.mask_churn = t.previous_selection.as_ref().map(|previous| churn(previous, &selected));
@@ -90,4 +103,29 @@ impl MaskedLinear {
     pub fn mask_churn(&self) -> Option<f64> {
         self.training.as_ref().and_then(|t| t.mask_churn)
     }
+
+    /// The iteration's sigma (in `sigma_scale` units), the rows' mean score gap at the cut
+    /// (score units; None in absolute units) and the mask churn; None outside a new task's
+    /// training (a repeat's mask is fixed) and for the mask baselines.
+    pub fn iteration_stats(&self) -> anyhow::Result<Option<LayerIteration>> {
+        match &self.training {
+            Some(t) if !t.repeat && !self.cfg.rule.is_baseline() && t.mask.is_some() => Ok(Some(LayerIteration {
+                sigma: f64::from(self.sigma()?),
+                score_gap: t.score_gap,
+                mask_churn: t.mask_churn,
+            })),
+            _ => Ok(None),
+        }
+    }
+}
+
+/// One layer's soft-score statistics of an iteration (see [`MaskedLinear::iteration_stats`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LayerIteration {
+    /// sigma, in the layer's `sigma_scale` units.
+    pub sigma: f64,
+    /// The rows' mean score gap at the top-k cut (the unit of sigma under `score_gap`).
+    pub score_gap: Option<f64>,
+    /// The share of the hard mask the previous iteration had not selected.
+    pub mask_churn: Option<f64>,
 }

@@ -1,7 +1,9 @@
 //! Training control: where training is (task, progress, iterations per
-//! second, time left, env steps per second), what starts next, the last
-//! evaluation asked for, and the run folder everything lands in.
+//! second, time left, env steps per second, the actor's mask sigma and churn),
+//! what starts next, the last evaluation asked for, and the run folder
+//! everything lands in.
 
+use crate::engine::TaskCurve;
 use crate::tui::app::App;
 use crate::tui::ui::block;
 use ratatui::layout::Rect;
@@ -9,6 +11,7 @@ use ratatui::style::{Color, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Wrap};
 use ratatui::Frame;
+use std::collections::BTreeMap;
 
 fn duration(seconds: f64) -> String {
     let s = seconds.max(0.0).round() as u64;
@@ -17,6 +20,20 @@ fn duration(seconds: f64) -> String {
         60..=3599 => format!("{}m {:02}s", s / 60, s % 60),
         _ => format!("{}h {:02}m", s / 3600, s % 3600 / 60),
     }
+}
+
+/// The actor's soft scores at the last iteration (a masked method in a new task): the mean
+/// sigma of its layers (in the run's `sigma_scale` units) and the mean share of its hard mask
+/// redrawn, so the entropy phase's effect on the selection shows while it runs.
+fn soft_scores_line(curve: &TaskCurve) -> Option<String> {
+    let last_of_actor = |series: &BTreeMap<String, Vec<f64>>| -> Option<f64> {
+        let last: Vec<f64> =
+            series.iter().filter(|(k, _)| k.starts_with("actor.")).filter_map(|(_, v)| v.last().copied()).collect();
+        (!last.is_empty()).then(|| last.iter().sum::<f64>() / last.len() as f64)
+    };
+    let sigma = last_of_actor(&curve.sigma)?;
+    let churn = last_of_actor(&curve.mask_churn).map_or("-".into(), |c| format!("{:.1} %", 100.0 * c));
+    Some(format!("actor masks: sigma {sigma:.3}  redrawn {churn}"))
 }
 
 pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
@@ -42,6 +59,9 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
             l.sps.map_or("-".into(), |s| format!("{s:.0}")),
             left.map_or("-".into(), duration)
         )));
+        if let Some(line) = soft_scores_line(&l.curve) {
+            lines.push(Line::styled(line, Style::new().fg(Color::Gray)));
+        }
         if l.physics_resets > 0 {
             lines.push(Line::styled(
                 format!("physics resets {} (envs whose physics blew up, reset)", l.physics_resets),
