@@ -17,6 +17,10 @@ for m in "${methods[@]}"; do
     [ -f "$dir/run.toml" ] && resume=(--resume)
     start=$(date +%s)
     echo "== $m ($(date -u +%H:%M)) =="
-    "$bin" run --config scenes/compare-a1.toml --method "$m" --out "$dir" "${resume[@]}"
+    if [ "$m" = ours-paper ]; then
+        "$bin" run --config scenes/compare-a1-paper.toml --out "$dir" "${resume[@]}"
+    else
+        "$bin" run --config scenes/compare-a1.toml --method "$m" --out "$dir" "${resume[@]}"
+    fi
     echo "== $m took $(( $(date +%s) - start )) s =="
 done

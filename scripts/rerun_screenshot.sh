@@ -8,7 +8,7 @@
 # apt-get install xvfb mesa-vulkan-drivers libgl1-mesa-dri).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-policy=${1:-policies/sequence-a1/checkpoints/step-03-crash_FR}
+policy=${1:-policies/sequence-a1-adapter/checkpoints/step-03-crash_FR}
 task=${2:-crash:FL}
 out=${3:-snapshots/rerun_view_crash_fl.png}
 rerun=${RERUN:-rerun}

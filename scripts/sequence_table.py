@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """Markdown tables of a `quadcl run` metrics.json: every task evaluated after the
 last completed task (with issue 5's targets, fall_rate <= 0.10 and lin_vel_err
-<= 0.40 m/s, unless changed), and each task's training curve in blocks.
+<= 0.40 m/s, unless changed), how each masked step used the network (share of its
+mask from earlier tasks, vacant share left), the entropy phase (the actor's sigma
+and mask churn over a task's first iterations, where recorded), and each task's
+training curve in blocks.
 
-    python3 scripts/sequence_table.py RUN/metrics.json [--block 250] [--fall 0.10] [--lin 0.40]
+    python3 scripts/sequence_table.py RUN/metrics.json [--block 250] [--fall 0.10] [--lin 0.40] [--entropy-block 50] [--masks MASKS.json]
 """
 import argparse
 import json
@@ -15,12 +18,36 @@ def mean(values):
     return sum(values) / len(values) if values else float("nan")
 
 
+def capacity_from_masks(report, names):
+    """The steps' capacity figures from `quadcl masks --json` of the final policy, for runs
+    written before metrics.json recorded them: tasks end in id order, and a task's
+    `from_vacant` elements leave the vacant pool for good."""
+    layers = [l for n in report["networks"] for l in n["layers"]]
+    total = sum(l["shape"][0] * l["shape"][1] for l in layers)
+    order = [t for t in report["tasks"]]
+    used, out = 0, []
+    for task in order:
+        rows = [m for l in layers for m in l["per_task"] if m["task"] == task]
+        used += sum(m["from_vacant"] for m in rows)
+        if task not in names:
+            continue
+        exhausted = [l["name"] for l in layers if l["vacant"] == 0 and task == order[-1]]
+        out.append((task, {
+            "from_occupied_share": sum(m["from_occupied"] for m in rows) / max(1, sum(m["selected"] for m in rows)),
+            "vacant_share_after": 1 - used / total,
+            "exhausted_layers": exhausted,
+        }))
+    return out
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("metrics")
     parser.add_argument("--block", type=int, default=250)
     parser.add_argument("--fall", type=float, default=0.10)
     parser.add_argument("--lin", type=float, default=0.40)
+    parser.add_argument("--entropy-block", type=int, default=50)
+    parser.add_argument("--masks", help="`quadcl masks --json` of the final policy, for runs without capacity records")
     args = parser.parse_args()
     m = json.load(open(args.metrics))
     done = m["completed_steps"]
@@ -36,6 +63,31 @@ def main():
         mark = ("yes" if ok else "NO") if e["task"] in trained else "(base)"
         print(f"| {e['task']} | {e['performance']:.3f} | {e['mean_return']:.2f} | {e['fall_rate']:.3f} "
               f"| {e['lin_vel_err']:.3f} | {e['ang_vel_err']:.3f} | {mark} |")
+    capacity = [(s["name"], s["capacity"]) for s in m["steps"][:done] if s.get("capacity")]
+    if not capacity and args.masks:
+        capacity = capacity_from_masks(json.load(open(args.masks)), [s["name"] for s in m["steps"][:done]])
+    if capacity:
+        print("\nHow each masked step used the network (its mask's share taken from earlier tasks' "
+              "weights; the layers' vacant share left after it):\n")
+        print("| step | task | from earlier tasks | vacant left | layers with no vacant weight |")
+        print("| --- | --- | --- | --- | --- |")
+        for i, (name, cap) in enumerate(capacity):
+            print(f"| {i} | {name} | {cap['from_occupied_share']:.3f} | {cap['vacant_share_after']:.3f} "
+                  f"| {', '.join(cap['exhausted_layers']) or '-'} |")
+    phases = [c for c in m["curves"][:done] if c.get("sigma")]
+    if phases:
+        print(f"\nThe entropy phase: the actor's mean sigma and mask churn (share redrawn per iteration), "
+              f"per block of {args.entropy_block} iterations:\n")
+        print("| task | iterations | sigma | churn |")
+        print("| --- | --- | --- | --- |")
+        for c in phases:
+            actor = [k for k in c["sigma"] if k.startswith("actor.")]
+            n = max(len(c["sigma"][k]) for k in actor)
+            for start in range(0, min(n, args.entropy_block * 4), args.entropy_block):
+                end = min(start + args.entropy_block, n)
+                sigma = mean([mean(c["sigma"][k][start:end]) for k in actor])
+                churn = mean([mean(c["mask_churn"].get(k, [])[max(start - 1, 0):max(end - 1, 0)]) for k in actor])
+                print(f"| {c['name']} | {start + 1}-{end} | {sigma:.3f} | {churn:.4f} |")
     for c in m["curves"][:done]:
         print(f"\n{c['name']} (step {c['step']}), training rollouts:\n")
         keys = ["performance", "episodic_return", "lin_vel_err", "ang_vel_err"] + (["fall_rate"] if c.get("fall_rate") else [])

@@ -11,7 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${1:-target/release/quadcl}
 [ -x "$bin" ] || { echo "no binary at $bin: cargo build --release first" >&2; exit 1; }
-seq_ckpt=policies/sequence-a1/checkpoints/step-03-crash_FR
+seq_ckpt=policies/sequence-a1-adapter/checkpoints/step-03-crash_FR
 evals=(
   "policies/base-a1-flat none"
   "policies/base-a1-flat crash:FL"

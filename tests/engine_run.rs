@@ -137,8 +137,8 @@ fn keeping_only_the_last_checkpoint_still_resumes_identically() {
 
 #[test]
 fn the_shipped_metrics_json_written_before_the_renames_still_reads_and_round_trips() {
-    // policies/sequence-a1 was written with `fine_tune` step flags and evaluations without return_std.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("policies/sequence-a1/metrics.json");
+    // policies/sequence-a1-adapter was written with `fine_tune` step flags and evaluations without return_std.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("policies/sequence-a1-adapter/metrics.json");
     let m = MetricsFile::load(&path).unwrap();
     assert_eq!((m.completed_steps, m.tasks.len()), (4, 5));
     assert!(m.steps.iter().all(|s| !s.repeat), "no step of that run repeats a task");

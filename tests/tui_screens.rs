@@ -1,4 +1,4 @@
-//! The workbench's screens on the shipped run (`policies/sequence-a1`
+//! The workbench's screens on the shipped run (`policies/sequence-a1-adapter`
 //! continued with the 12-task sequence, into a temporary folder), drawn on
 //! ratatui's TestBackend and snapshotted (in `snapshots/`): the first screen
 //! at 120x40 and 80x24 with the masks of `crash:FL`, the evaluation matrix,
@@ -63,7 +63,7 @@ fn the_shipped_run_opens_on_every_screen() {
     // The robot panel: stop the live thread and draw a frame simulated here (deterministic).
     app.update(Action::Show(Screen::Robot));
     worker.stop_robot();
-    let policy = root().join("policies/sequence-a1/checkpoints/step-03-crash_FR");
+    let policy = root().join("policies/sequence-a1-adapter/checkpoints/step-03-crash_FR");
     let mut viewer = quadcl::rl::RobotViewer::new(&policy, "crash:FL", 1, Some([0.5, 0.0, 0.0])).unwrap();
     let mut frame = viewer.frame();
     for _ in 0..50 {

@@ -13,7 +13,7 @@
 //! the machine), and `tui_ui_cpu_share`: the CPU time of the UI thread over
 //! the wall time times the cores, i.e. the share of the machine the open UI
 //! takes from training (Linux: `/proc/thread-self/stat`). Run from the repository
-//! root (the frame figures need `policies/sequence-a1`; without it they are skipped).
+//! root (the frame figures need `policies/sequence-a1-adapter`; without it they are skipped).
 
 use quadcl::engine::{Event, Observer, OpenMode, Runner};
 use quadcl::tui::{tick, ui, wait_until, Action, App, Clock, OpenSpec, Screen, Worker, WorkerMsg};
@@ -58,7 +58,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn frames(seconds: f64, report: &mut Report) -> anyhow::Result<()> {
-    if !Path::new("policies/sequence-a1/metrics.json").exists() {
+    if !Path::new("policies/sequence-a1-adapter/metrics.json").exists() {
         report.insert("tui_frame_ms_200x60".into(), json!(null));
         return Ok(());
     }
@@ -66,13 +66,13 @@ fn frames(seconds: f64, report: &mut Report) -> anyhow::Result<()> {
     let spec = OpenSpec {
         run_dir: tmp.path().join("workbench"),
         config: Some("scenes/sequence-a1.toml".into()),
-        continues: Some("policies/sequence-a1".into()),
+        continues: Some("policies/sequence-a1-adapter".into()),
     };
     let mut app = App::new(spec.run_dir.clone(), (200, 60), Clock::Ticks(0));
     let mut worker = Worker::spawn(spec);
     wait_until(&mut app, &mut worker, Duration::from_secs(60), |a| a.opened.is_some() && a.views.is_some())?;
     let mut viewer = quadcl::rl::RobotViewer::new(
-        Path::new("policies/sequence-a1/checkpoints/step-03-crash_FR"),
+        Path::new("policies/sequence-a1-adapter/checkpoints/step-03-crash_FR"),
         "crash:FR",
         1,
         Some([0.5, 0.0, 0.0]),

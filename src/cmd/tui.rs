@@ -1,6 +1,6 @@
 //! `quadcl tui [--run DIR] [--config FILE] [--continues DIR]` (and `quadcl`
 //! alone): opens the workbench. Without options it opens `runs/workbench`,
-//! which on first use continues the shipped 4-task run `policies/sequence-a1`
+//! which on first use continues the shipped 4-task run `policies/sequence-a1-adapter`
 //! with the rest of the default 12-task sequence `scenes/sequence-a1.toml`.
 //! Without a terminal it says what to run instead.
 
@@ -14,7 +14,7 @@ pub const DEFAULT_RUN: &str = "runs/workbench";
 /// The sequence it trains when none is named.
 pub const DEFAULT_CONFIG: &str = "scenes/sequence-a1.toml";
 /// The shipped run it continues.
-pub const DEFAULT_CONTINUES: &str = "policies/sequence-a1";
+pub const DEFAULT_CONTINUES: &str = "policies/sequence-a1-adapter";
 
 #[derive(Debug, Args, Default)]
 pub struct TuiArgs {

@@ -38,7 +38,7 @@ pub fn open_shipped(dir: &Path, size: (u16, u16)) -> (App, Worker) {
     let spec = OpenSpec {
         run_dir: dir.join("workbench"),
         config: Some(root().join("scenes/sequence-a1.toml")),
-        continues: Some(root().join("policies/sequence-a1")),
+        continues: Some(root().join("policies/sequence-a1-adapter")),
     };
     open(spec, size)
 }
