@@ -26,15 +26,8 @@ fn first_iterations(entropy: bool) -> Vec<Metrics> {
         ..MaskConfig::default()
     };
     let mut learner = ToyLearner::new(&mask, 3).unwrap();
-    let start = TaskStart {
-        step: 0,
-        task: 0,
-        name: "none".into(),
-        related: vec![],
-        mask,
-        iterations: E + 20,
-        seed: 11,
-    };
+    let start =
+        TaskStart { step: 0, task: 0, name: "none".into(), related: vec![], mask, iterations: E + 20, seed: 11 };
     learner.begin_task(&start).unwrap();
     (0..E + 20).map(|_| learner.train_iteration().unwrap()).collect()
 }
@@ -60,7 +53,12 @@ fn the_entropy_phase_widens_sigma_and_redraws_more_of_the_mask_than_without_it()
         // The term pushes ln sigma up by about the rate every step; without it only the
         // loss moves sigma.
         assert!(s_with[E - 1] > 3.0 * s_with[0], "{layer}: sigma {} -> {} with the term", s_with[0], s_with[E - 1]);
-        assert!(s_with[E - 1] > 2.0 * s_without[E - 1], "{layer}: {} with, {} without", s_with[E - 1], s_without[E - 1]);
+        assert!(
+            s_with[E - 1] > 2.0 * s_without[E - 1],
+            "{layer}: {} with, {} without",
+            s_with[E - 1],
+            s_without[E - 1]
+        );
         // After E iterations sigma decays x0.99 per iteration.
         assert!((s_with[E + 5] / s_with[E + 4] - 0.99).abs() < 1e-4, "{layer}: no decay after E");
     }

@@ -137,7 +137,9 @@ fn an_entropy_term_on_the_action_widens_the_policys_action_distribution() {
         cfg.net.mask.entropy_weight = 1.0;
         cfg.net.mask.entropy_iterations = 4;
         let metrics = run(&cfg, 4, 3);
-        assert!(metrics.iter().all(|m| (m["losses/soft_score"] == 0.0) == (target == quadcl::nn::EntropyTarget::Action)));
+        assert!(metrics
+            .iter()
+            .all(|m| (m["losses/soft_score"] == 0.0) == (target == quadcl::nn::EntropyTarget::Action)));
         metrics[3]["charts/action_std"]
     };
     let (on_scores, on_action) =

@@ -60,12 +60,7 @@ impl DenseMlp {
         self.layers
             .iter()
             .enumerate()
-            .flat_map(|(i, (w, b))| {
-                [
-                    Param::free(format!("l{i}.weight"), w),
-                    Param::free(format!("l{i}.bias"), b),
-                ]
-            })
+            .flat_map(|(i, (w, b))| [Param::free(format!("l{i}.weight"), w), Param::free(format!("l{i}.bias"), b)])
             .collect()
     }
 }

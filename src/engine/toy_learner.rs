@@ -14,7 +14,9 @@ use crate::nn::{
     checkpoint, mask_report, mask_views, transfer_lift, AdamConfig, DenseMlp, LayerLift, LayerView, MaskReport,
     MaskedAdam, MaskedMlp, Network, NetworkKind, TaskId,
 };
-use crate::rl::{apply_hooks, layer_metrics, metric_names, EvalReport, Metrics, NoHooks, OutputSample, PolicyProbe, UpdateHooks};
+use crate::rl::{
+    apply_hooks, layer_metrics, metric_names, EvalReport, Metrics, NoHooks, OutputSample, PolicyProbe, UpdateHooks,
+};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use rand::{Rng, SeedableRng};

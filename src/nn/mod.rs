@@ -30,7 +30,9 @@ mod select;
 mod state;
 mod stats;
 
-pub use crate::config::net::{Activation, BiasStart, EntropyTarget, MaskConfig, NetworkKind, SelectionRule, SigmaScale};
+pub use crate::config::net::{
+    Activation, BiasStart, EntropyTarget, MaskConfig, NetworkKind, SelectionRule, SigmaScale,
+};
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};
 pub use dense::{DenseLayer, DenseMlp};

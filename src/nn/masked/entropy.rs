@@ -36,7 +36,8 @@ impl MaskedLinear {
             return Ok(Tensor::zeros((), DType::F32, &Device::Cpu)?);
         }
         let n = (self.out_dim * self.in_dim) as f64;
-        let h = ((self.log_sigma.as_tensor() * n)? + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
+        let h =
+            ((self.log_sigma.as_tensor() * n)? + n * 0.5 * (2.0 * std::f64::consts::PI * std::f64::consts::E).ln())?;
         Ok((h * -self.cfg.entropy_weight)?.sum_all()?)
     }
 }
