@@ -2,7 +2,8 @@
 """Markdown tables of a `quadcl run` metrics.json: every task evaluated after the
 last completed task (with issue 5's targets, fall_rate <= 0.10 and lin_vel_err
 <= 0.40 m/s, unless changed), how each masked step used the network (share of its
-mask from earlier tasks, vacant share left), the entropy phase (the actor's sigma
+mask from earlier tasks, vacant share left; with --masks, how much came from the first
+task's weights and how much from the tasks between), the entropy phase (the actor's sigma
 and mask churn over a task's first iterations, where recorded), and each task's
 training curve in blocks.
 
@@ -40,6 +41,24 @@ def capacity_from_masks(report, names):
     return out
 
 
+def print_reuse(report):
+    """Where each task's mask came from, over every masked layer: the first task's (the base's)
+    weights, the fresh weights of the tasks between, or vacant weights. The first task's
+    elements are all occupied, and every other occupied element is an earlier task's fresh one,
+    so the middle share is the task's occupied share less its overlap with the first task."""
+    layers = [l for n in report["networks"] for l in n["layers"]]
+    tasks = report["tasks"]
+    print(f"\nWhere each task's mask came from (shares of its selected weights):\n")
+    print(f"| task | from {tasks[0]} | from the tasks between | fresh (vacant) |")
+    print("| --- | --- | --- | --- |")
+    for i, t in enumerate(tasks[1:], 1):
+        rows = [m for l in layers for m in l["per_task"] if m["task"] == t]
+        selected = max(1, sum(m["selected"] for m in rows))
+        occupied = sum(m["from_occupied"] for m in rows)
+        first = sum(l["overlap"][i][0] for l in layers)
+        print(f"| {t} | {first / selected:.3f} | {(occupied - first) / selected:.3f} | {1 - occupied / selected:.3f} |")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("metrics")
@@ -47,7 +66,8 @@ def main():
     parser.add_argument("--fall", type=float, default=0.10)
     parser.add_argument("--lin", type=float, default=0.40)
     parser.add_argument("--entropy-block", type=int, default=50)
-    parser.add_argument("--masks", help="`quadcl masks --json` of the final policy, for runs without capacity records")
+    parser.add_argument("--masks", help="`quadcl masks --json` of the final policy: where each mask came from "
+                        "(and the capacity table of runs written before metrics.json recorded it)")
     args = parser.parse_args()
     m = json.load(open(args.metrics))
     done = m["completed_steps"]
@@ -74,6 +94,8 @@ def main():
         for i, (name, cap) in enumerate(capacity):
             print(f"| {i} | {name} | {cap['from_occupied_share']:.3f} | {cap['vacant_share_after']:.3f} "
                   f"| {', '.join(cap['exhausted_layers']) or '-'} |")
+    if args.masks:
+        print_reuse(json.load(open(args.masks)))
     phases = [c for c in m["curves"][:done] if c.get("sigma")]
     if phases:
         print(f"\nThe entropy phase: the actor's mean sigma and mask churn (share redrawn per iteration), "
