@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Activation {
-    /// ELU with alpha = 1 (the paper's choice).
+    /// ELU with alpha = 1 (rsl_rl's and legged_gym's choice, and the shipped policies'; the
+    /// paper says ReLU: `activation = "relu"` for its reading).
     #[default]
     Elu,
     /// max(x, 0).
@@ -296,12 +297,13 @@ pub struct MlpConfig {
 
 impl Default for MlpConfig {
     fn default() -> Self {
-        Self::paper(&[512, 256, 128])
+        Self::elu(&[512, 256, 128])
     }
 }
 
 impl MlpConfig {
-    fn paper(hidden: &[usize]) -> Self {
+    /// `hidden` with ELU (see [`Activation::Elu`]).
+    fn elu(hidden: &[usize]) -> Self {
         Self { hidden: hidden.to_vec(), activation: Activation::Elu }
     }
 
@@ -325,11 +327,12 @@ impl MlpConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct NetConfig {
-    /// The actor (policy mean): 512-256-128 ELU as in the paper.
+    /// The actor (policy mean): 512-256-128 (the paper's sizes), ELU (the paper says ReLU).
     pub actor: MlpConfig,
     /// The critic (privileged value function).
     pub critic: MlpConfig,
-    /// The context estimator's encoder (CENet).
+    /// The context estimator's encoder (CENet): [256, 128] (DreamWaQ's encoder and the shipped
+    /// policies'; the paper says two hidden layers of 256: `hidden = [256, 256]`).
     pub cenet: MlpConfig,
     /// Mask settings shared by every masked network.
     pub mask: MaskConfig,
@@ -357,9 +360,9 @@ impl NetConfig {
 impl Default for NetConfig {
     fn default() -> Self {
         Self {
-            actor: MlpConfig::paper(&[512, 256, 128]),
-            critic: MlpConfig::paper(&[512, 256, 128]),
-            cenet: MlpConfig::paper(&[256, 128]),
+            actor: MlpConfig::elu(&[512, 256, 128]),
+            critic: MlpConfig::elu(&[512, 256, 128]),
+            cenet: MlpConfig::elu(&[256, 128]),
             mask: MaskConfig::default(),
             kind: NetworkKind::Masked,
         }
@@ -379,7 +382,7 @@ mod tests {
             (vec![1 << 20], "not in 1..=65536"),
             (vec![60_000, 60_000], "hidden weights: at most"),
         ] {
-            let cfg = NetConfig { critic: MlpConfig::paper(&hidden), ..NetConfig::default() };
+            let cfg = NetConfig { critic: MlpConfig::elu(&hidden), ..NetConfig::default() };
             let err = cfg.validate().unwrap_err().to_string();
             assert!(err.contains(expect), "{hidden:?}: {err}");
         }
