@@ -25,14 +25,16 @@ def capacity_from_masks(report, names):
     `from_vacant` elements leave the vacant pool for good."""
     layers = [l for n in report["networks"] for l in n["layers"]]
     total = sum(l["shape"][0] * l["shape"][1] for l in layers)
-    order = [t for t in report["tasks"]]
     used, out = 0, []
-    for task in order:
+    left = {l["name"]: l["shape"][0] * l["shape"][1] for l in layers}
+    for task in report["tasks"]:
         rows = [m for l in layers for m in l["per_task"] if m["task"] == task]
         used += sum(m["from_vacant"] for m in rows)
+        for l in layers:
+            left[l["name"]] -= sum(m["from_vacant"] for m in l["per_task"] if m["task"] == task)
         if task not in names:
             continue
-        exhausted = [l["name"] for l in layers if l["vacant"] == 0 and task == order[-1]]
+        exhausted = [name for name, n in left.items() if n == 0]
         out.append((task, {
             "from_occupied_share": sum(m["from_occupied"] for m in rows) / max(1, sum(m["selected"] for m in rows)),
             "vacant_share_after": 1 - used / total,
@@ -55,7 +57,12 @@ def print_reuse(report):
         rows = [m for l in layers for m in l["per_task"] if m["task"] == t]
         selected = max(1, sum(m["selected"] for m in rows))
         occupied = sum(m["from_occupied"] for m in rows)
-        first = sum(l["overlap"][i][0] for l in layers)
+        # overlap rows and columns follow the tasks of the layer's own per_task list.
+        first = 0
+        for l in layers:
+            names = [m["task"] for m in l["per_task"]]
+            if t in names and tasks[0] in names:
+                first += l["overlap"][names.index(t)][names.index(tasks[0])]
         print(f"| {t} | {first / selected:.3f} | {(occupied - first) / selected:.3f} | {1 - occupied / selected:.3f} |")
 
 
@@ -89,10 +96,10 @@ def main():
     if capacity:
         print("\nHow each masked step used the network (its mask's share taken from earlier tasks' "
               "weights; the layers' vacant share left after it):\n")
-        print("| step | task | from earlier tasks | vacant left | layers with no vacant weight |")
-        print("| --- | --- | --- | --- | --- |")
-        for i, (name, cap) in enumerate(capacity):
-            print(f"| {i} | {name} | {cap['from_occupied_share']:.3f} | {cap['vacant_share_after']:.3f} "
+        print("| task | from earlier tasks | vacant left | layers with no vacant weight |")
+        print("| --- | --- | --- | --- |")
+        for name, cap in capacity:
+            print(f"| {name} | {cap['from_occupied_share']:.3f} | {cap['vacant_share_after']:.3f} "
                   f"| {', '.join(cap['exhausted_layers']) or '-'} |")
     if args.masks:
         print_reuse(json.load(open(args.masks)))
@@ -108,7 +115,7 @@ def main():
             for start in range(0, min(n, args.entropy_block * 4), args.entropy_block):
                 end = min(start + args.entropy_block, n)
                 sigma = mean([mean(c["sigma"][k][start:end]) for k in actor])
-                churn = mean([mean(c["mask_churn"].get(k, [])[max(start - 1, 0):max(end - 1, 0)]) for k in actor])
+                churn = mean([mean(c.get("mask_churn", {}).get(k, [])[max(start - 1, 0):max(end - 1, 0)]) for k in actor])
                 print(f"| {c['name']} | {start + 1}-{end} | {sigma:.3f} | {churn:.4f} |")
     for c in m["curves"][:done]:
         print(f"\n{c['name']} (step {c['step']}), training rollouts:\n")

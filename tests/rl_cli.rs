@@ -139,3 +139,33 @@ fn train_refuses_an_out_that_holds_a_run_unless_resume_or_force() {
     assert!(forced.success());
     assert_ne!(std::fs::read(out.join("metrics.jsonl")).unwrap(), before, "--force trained anew (another seed)");
 }
+
+/// The shipped base run (`policies/base-a1-flat-run`) was saved before issue 13 changed the
+/// soft-score defaults: its manifest names no `sigma_scale`. It must still be read as it ran
+/// (score units), so policies/README's recipe that ends it with p = 0 resumes and makes the
+/// shipped `base-a1-flat-shared` again, byte for byte.
+#[test]
+fn a_base_run_saved_before_the_score_gap_unit_resumes_and_ends_as_it_did() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("base-shared");
+    std::fs::create_dir_all(out.join("checkpoint")).unwrap();
+    let run = root.join("policies/base-a1-flat-run");
+    for f in ["config.toml", "summary.json", "metrics.jsonl"] {
+        std::fs::copy(run.join(f), out.join(f)).unwrap();
+    }
+    for entry in std::fs::read_dir(run.join("checkpoint")).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), out.join("checkpoint").join(entry.file_name())).unwrap();
+    }
+    let output = quadcl()
+        .current_dir(root)
+        .args(["train", "--config", "scenes/train-base-shared.toml", "--resume", "--iterations", "3175", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let made = std::fs::read(out.join("policy/masks.safetensors")).unwrap();
+    let shipped = std::fs::read(root.join("policies/base-a1-flat-shared/masks.safetensors")).unwrap();
+    assert!(made == shipped, "the ended masks differ from the shipped base-a1-flat-shared");
+}

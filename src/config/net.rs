@@ -70,8 +70,14 @@ pub enum SigmaScale {
     /// Units of the score spread at each row's top-k cut: S = mu + sigma * g_row * eps, where
     /// g_row is half the distance between the scores ranked k - w and k + w + 1 among the row's
     /// selectable elements (w = max(1, round(k / 10)); the whole layer for `per-layer`), taken
-    /// from mu at every iteration. At sigma 1 a score at the cut moves about w ranks per standard
-    /// deviation, whatever the scores' spread, so the entropy term changes the selection.
+    /// from mu at every iteration. Where the row's selection is one top-k over its selectable
+    /// elements (a first task, `free`, `per-layer`), a score at the cut moves about w ranks per
+    /// standard deviation at sigma 1, whatever the scores' spread, so the entropy term changes the
+    /// selection. Under `split` the rule cuts the vacant and the occupied groups apart, at their
+    /// own quotas, where ranks lie sparser than in the pooled row: at c 0.2, lambda 0.25 with the
+    /// base occupying 0.2 of a row and alike spread scores, a score at a group's cut moves about
+    /// w/3 (vacant) to w/4 (occupied) ranks per sigma. (A gap per group is the refinement; the
+    /// shipped paper-regime runs used this one.)
     #[default]
     ScoreGap,
 }
@@ -104,13 +110,17 @@ pub struct MaskConfig {
     pub private_share: f64,
     /// Selection rule: "split" (the method), "free", "vacant" or "per-layer".
     pub rule: SelectionRule,
-    /// Standard deviation of the initial soft-score means (Gaussian around 0). It sets how fast
-    /// the hard mask changes: Adam moves every mean by about the learning rate per step, so at
-    /// 0.01 a PPO run redraws 37 % of its selected weights every iteration
-    /// (`charts/mask_churn_actor`), at 0.3 about 2-3 %.
+    /// Standard deviation of the initial soft-score means (Gaussian around 0). Adam moves every
+    /// mean by about the learning rate per step, so the spread sets how fast the means' drift
+    /// changes the hard mask; in score units (`sigma_scale = "absolute"`) it also sets what the
+    /// noise does: there, at 0.01 a PPO run redrew 37 % of its selected weights every iteration
+    /// (`charts/mask_churn_actor`), at 0.3 about 2-3 %. Under `score_gap` the noise scales with
+    /// the spread and only the drift depends on it.
     pub score_init_std: f64,
     /// What sigma, sigma_init, sigma_floor and sigma_max are measured in: `score_gap` (the
-    /// scores' spread at each row's top-k cut) or `absolute` (score units).
+    /// scores' spread at each row's top-k cut) or `absolute` (score units). Set the three sigma
+    /// values with it: the defaults (0.5, 1e-3, 4) are in score-gap units, and in score units a
+    /// sigma of 0.5 against means spread 0.3 draws nearly random masks.
     pub sigma_scale: SigmaScale,
     /// Initial soft-score sigma (one per layer) at the start of every task, in `sigma_scale`
     /// units (the layer trains ln sigma, so sigma stays > 0 whatever the optimiser does).
@@ -207,6 +217,20 @@ impl MaskConfig {
             reinit: other.reinit,
             reinit_scale: other.reinit_scale,
             ..self.clone()
+        }
+    }
+
+    /// Fills in what a saved mask configuration from before issue 13 left out: such a file ran
+    /// with sigma in score units and ln sigma at the PPO optimiser's rate, so a `mask` object
+    /// without `sigma_scale` gets `"absolute"` (and `sigma_learning_rate` 0 when missing) instead
+    /// of today's defaults. For checkpoints and manifests, which record a run; a run file a user
+    /// writes takes the defaults. Anything but a JSON object is left as it is.
+    pub fn fill_in_pre_issue_13(mask: &mut serde_json::Value) {
+        if let Some(m) = mask.as_object_mut() {
+            if !m.contains_key("sigma_scale") {
+                m.insert("sigma_scale".into(), "absolute".into());
+                m.entry("sigma_learning_rate").or_insert(0.0.into());
+            }
         }
     }
 
@@ -386,6 +410,19 @@ mod tests {
             let err = cfg.validate().unwrap_err().to_string();
             assert!(err.contains(expect), "{hidden:?}: {err}");
         }
+    }
+
+    #[test]
+    fn a_saved_mask_without_a_sigma_scale_is_read_as_it_ran_in_score_units() {
+        let mut old = serde_json::json!({ "capacity": 0.2, "sigma_init": 0.005, "sigma_max": 0.05 });
+        MaskConfig::fill_in_pre_issue_13(&mut old);
+        let m: MaskConfig = serde_json::from_value(old).unwrap();
+        assert_eq!((m.sigma_scale, m.sigma_learning_rate, m.sigma_init), (SigmaScale::Absolute, 0.0, 0.005));
+        // A mask that names its scale keeps everything it says.
+        let mut new = serde_json::json!({ "sigma_scale": "score_gap", "sigma_learning_rate": 0.002 });
+        MaskConfig::fill_in_pre_issue_13(&mut new);
+        let m: MaskConfig = serde_json::from_value(new).unwrap();
+        assert_eq!((m.sigma_scale, m.sigma_learning_rate), (SigmaScale::ScoreGap, 0.002));
     }
 
     #[test]

@@ -265,6 +265,19 @@ pub fn tensor_integer(t: &Tensor, name: &str) -> anyhow::Result<u64> {
     }
 }
 
+/// [`MaskConfig::fill_in_pre_issue_13`] on every network's `mask` and on the run
+/// configuration's `net.mask` of a manifest.
+fn fill_in_pre_issue_13_masks(manifest: &mut serde_json::Value) {
+    if let Some(networks) = manifest.get_mut("networks").and_then(|n| n.as_array_mut()) {
+        for n in networks.iter_mut().filter_map(|n| n.get_mut("mask")) {
+            MaskConfig::fill_in_pre_issue_13(n);
+        }
+    }
+    if let Some(mask) = manifest.pointer_mut("/config/config/net/mask") {
+        MaskConfig::fill_in_pre_issue_13(mask);
+    }
+}
+
 /// Loads a policy directory written by [`save_policy`].
 pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
     let manifest_path = dir.join(MANIFEST_FILE);
@@ -272,7 +285,11 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
         std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
     let manifest_json: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
-    let manifest = Manifest::deserialize(&manifest_json)
+    // Masks saved before issue 13 ran with sigma in score units (the digest below is of the
+    // file as written).
+    let mut upgraded = manifest_json.clone();
+    fill_in_pre_issue_13_masks(&mut upgraded);
+    let manifest = Manifest::deserialize(&upgraded)
         .with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
     ensure!(
         manifest.format_version == FORMAT_VERSION,
