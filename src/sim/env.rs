@@ -24,6 +24,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
 
+mod replay;
+pub use replay::{EpisodeReplay, Intervention};
+
 /// How long a push shows in the privileged observation, seconds.
 const PUSH_STATE_HOLD_S: f32 = 1.0;
 
@@ -57,6 +60,10 @@ pub struct LocomotionEnv {
     /// Simulated seconds since the env was built.
     sim_time: f64,
     observer: Option<Box<dyn StepObserver>>,
+    /// The random stream as the current episode began (for [`EpisodeReplay`]).
+    episode_start_rng: crate::util::RngState,
+    /// The current episode's actions and interventions, when a replay is kept.
+    replay_log: Option<replay::EpisodeLog>,
 }
 
 impl LocomotionEnv {
@@ -105,6 +112,8 @@ impl LocomotionEnv {
             episode: EpisodeStats::default(),
             sim_time: 0.0,
             observer: None,
+            episode_start_rng: crate::util::RngState::of(&ChaCha8Rng::seed_from_u64(0)),
+            replay_log: None,
         };
         env.reset(0)?;
         Ok(env)
@@ -119,6 +128,11 @@ impl LocomotionEnv {
     /// Starts a new episode, drawing from the env's own random stream:
     /// domain randomisation, a fresh world at the default pose, a command.
     pub fn reset_episode(&mut self) -> anyhow::Result<()> {
+        self.episode_start_rng = crate::util::RngState::of(&self.rng);
+        if let Some(log) = &mut self.replay_log {
+            log.actions.clear();
+            log.interventions.clear();
+        }
         let c = &self.cfg;
         self.params = if c.randomize {
             PhysicsParams {
@@ -225,6 +239,7 @@ impl LocomotionEnv {
     /// Sets the command until the next resample (for evaluation and tests). The
     /// observation and the newest history entry (every entry, right after a reset) show it.
     pub fn set_command(&mut self, command: [f32; 3]) {
+        self.log_intervention(Intervention::Command(command));
         self.command = command;
         self.write_observations();
         let first = if self.episode_step == 0 { 0 } else { HISTORY_LEN - 1 };
@@ -270,6 +285,12 @@ impl LocomotionEnv {
 
     /// Adds a horizontal velocity change to the trunk now (a push).
     pub fn push(&mut self, dv: [f32; 2]) {
+        self.log_intervention(Intervention::Push(dv));
+        self.apply_push(dv);
+    }
+
+    /// A push, from outside ([`Self::push`]) or from the episode's own schedule.
+    fn apply_push(&mut self, dv: [f32; 2]) {
         self.sim.push(dv);
         self.push = dv;
         self.push_age_s = 0.0;
@@ -285,6 +306,7 @@ impl LocomotionEnv {
         if let Some(i) = action.iter().position(|a| !a.is_finite()) {
             bail!("env {}: action[{i}] is {} at step {}", self.env_index, action[i], self.total_steps);
         }
+        self.log_action(action);
         let clip = c.clip_actions;
         let policy_action: [f32; 12] = std::array::from_fn(|i| action[i].clamp(-clip, clip));
         let mut applied = policy_action;
@@ -368,7 +390,7 @@ impl LocomotionEnv {
             if self.episode_step % push_steps == 0 {
                 let m = c.push_max_vel;
                 let dv = [self.rng.gen_range(-m..=m), self.rng.gen_range(-m..=m)];
-                self.push(dv);
+                self.apply_push(dv);
             }
         }
 

@@ -9,7 +9,8 @@
 //! - `tasks`: leg perturbations (crash / invert / noise) and their syntax.
 //! - [`obs`]: observation and privileged-observation layouts.
 //! - [`reward`]: the paper's Table 1, one function per term.
-//! - `env`: `LocomotionEnv`, reset(seed) / step(action); `env_setup` its plain helpers.
+//! - `env`: `LocomotionEnv`, reset(seed) / step(action); `env/replay` its exact state for
+//!   checkpoints (a replay of the current episode); `env_setup` its plain helpers.
 //! - `episode`: the step result and the finished-episode summary.
 //! - `pose`: the robot's world-frame pose (trunk box, leg joints, feet) for drawing it.
 //! - `observe`: a step observer attached to one env (recorders), with every link's world pose.
@@ -33,7 +34,7 @@ mod urdf_mesh;
 mod urdf_text;
 mod vec_env;
 
-pub use env::LocomotionEnv;
+pub use env::{EpisodeReplay, Intervention, LocomotionEnv};
 pub use env_setup::{default_pose, joint_gains};
 pub use episode::{EpisodeSummary, PhysicsBlowUp, Step};
 pub use obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_BASE_LIN_VEL, PRIV_OBS_DIM};

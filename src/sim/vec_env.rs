@@ -8,7 +8,7 @@
 //! Buffers are row-major: observations (num_envs, OBS_DIM), privileged
 //! observations (num_envs, PRIV_OBS_DIM), histories (num_envs, HISTORY_LEN * OBS_DIM).
 
-use super::env::LocomotionEnv;
+use super::env::{EpisodeReplay, LocomotionEnv};
 use super::episode::{EpisodeSummary, PhysicsBlowUp, Step};
 use super::obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::robot::RobotModel;
@@ -135,6 +135,29 @@ impl VecEnv {
     /// Reseeds and resets every env (env i with `derive_seed(seed, Stream::Env(i))`).
     pub fn reset(&mut self, seed: u64) -> anyhow::Result<()> {
         self.envs.par_iter_mut().enumerate().try_for_each(|(i, env)| env.reset(derive_seed(seed, Stream::Env(i))))?;
+        self.gather();
+        Ok(())
+    }
+
+    /// From now on every env keeps what [`Self::replays`] needs (before the first step).
+    pub fn keep_replays(&mut self) -> anyhow::Result<()> {
+        self.envs.iter_mut().try_for_each(LocomotionEnv::keep_replay)
+    }
+
+    /// Every env's exact state, as a replay of its current episode (see `sim::EpisodeReplay`).
+    pub fn replays(&self) -> anyhow::Result<Vec<EpisodeReplay>> {
+        self.envs.iter().map(LocomotionEnv::replay).collect()
+    }
+
+    /// Puts every env in the state of its replay (the envs in parallel) and keeps replays from then on.
+    pub fn restore(&mut self, replays: &[EpisodeReplay]) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            replays.len() == self.envs.len(),
+            "{} env replays for a batch of {} envs",
+            replays.len(),
+            self.envs.len()
+        );
+        self.envs.par_iter_mut().zip(replays).try_for_each(|(env, replay)| env.restore(replay))?;
         self.gather();
         Ok(())
     }

@@ -24,14 +24,34 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     result.with_context(|| format!("writing {}", path.display()))
 }
 
+/// `DIR.new` and `DIR.old`, the two names [`replace_dir`] works with.
+fn aside_names(dir: &Path) -> anyhow::Result<(std::path::PathBuf, std::path::PathBuf)> {
+    let name = dir.file_name().with_context(|| format!("{} has no folder name", dir.display()))?.to_string_lossy();
+    Ok((dir.with_file_name(format!("{name}.new")), dir.with_file_name(format!("{name}.old"))))
+}
+
+/// Finishes a [`replace_dir`] that was interrupted between its two renames:
+/// `dir` missing, the old content moved aside to `DIR.old` and the complete new
+/// one in `DIR.new` (fill always ends before the old one moves). Then `DIR.new`
+/// becomes `dir`. Anything else is left as it is. Readers call it before
+/// looking for `dir`, and [`replace_dir`] before it clears stale folders.
+pub fn recover_replaced_dir(dir: &Path) -> anyhow::Result<()> {
+    let (fresh, old) = aside_names(dir)?;
+    if !dir.exists() && old.is_dir() && fresh.is_dir() {
+        std::fs::rename(&fresh, dir).with_context(|| format!("renaming {} to {}", fresh.display(), dir.display()))?;
+        tracing::warn!("{}: completed a replacement that was interrupted", dir.display());
+    }
+    Ok(())
+}
+
 /// Replaces the folder `dir` as a whole: `fill` writes the new content into
 /// `DIR.new/`, which is then renamed to `dir` (the old one moved aside to
 /// `DIR.old/` first and removed last). An interruption at any moment leaves
-/// `dir` either as it was or complete.
+/// `dir` as it was or complete, or (between the two renames) both aside,
+/// which [`recover_replaced_dir`] completes.
 pub fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
-    let name = dir.file_name().with_context(|| format!("{} has no folder name", dir.display()))?.to_string_lossy();
-    let fresh = dir.with_file_name(format!("{name}.new"));
-    let old = dir.with_file_name(format!("{name}.old"));
+    recover_replaced_dir(dir)?;
+    let (fresh, old) = aside_names(dir)?;
     for stale in [&fresh, &old] {
         if stale.exists() {
             std::fs::remove_dir_all(stale).with_context(|| format!("removing {}", stale.display()))?;
@@ -64,6 +84,28 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), b"new");
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names.len(), 1, "left behind: {names:?}");
+    }
+
+    #[test]
+    fn an_interruption_between_the_two_renames_is_completed_not_lost() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("checkpoint");
+        replace_dir(&dir, |d| write_atomic(&d.join("a"), b"1").map(|_| ())).unwrap();
+        // As a kill leaves it after `dir` moved aside and before `DIR.new` took its place.
+        std::fs::rename(&dir, tmp.path().join("checkpoint.old")).unwrap();
+        std::fs::create_dir(tmp.path().join("checkpoint.new")).unwrap();
+        std::fs::write(tmp.path().join("checkpoint.new").join("a"), b"2").unwrap();
+        recover_replaced_dir(&dir).unwrap();
+        assert_eq!(std::fs::read(dir.join("a")).unwrap(), b"2");
+        // The next replacement clears what is left aside and keeps the newest content until it is done.
+        replace_dir(&dir, |d| write_atomic(&d.join("a"), b"3").map(|_| ())).unwrap();
+        assert_eq!(std::fs::read(dir.join("a")).unwrap(), b"3");
+        assert!(!tmp.path().join("checkpoint.old").exists() && !tmp.path().join("checkpoint.new").exists());
+        // A fill cut short (only `DIR.new`, nothing aside) is not taken for a checkpoint.
+        std::fs::remove_dir_all(&dir).unwrap();
+        std::fs::create_dir(tmp.path().join("checkpoint.new")).unwrap();
+        recover_replaced_dir(&dir).unwrap();
+        assert!(!dir.exists());
     }
 
     #[test]

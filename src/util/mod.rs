@@ -1,11 +1,14 @@
 //! The base layer every other module may use (it imports none of them):
 //! atomic writes ([`write_atomic`], [`replace_dir`]), content hashes
-//! ([`sha256_hex`]), and the derivation of every random stream ([`derive_seed`]).
+//! ([`sha256_hex`]), the derivation of every random stream ([`derive_seed`]),
+//! and a stream's exact position for checkpoints ([`RngState`]).
 
 mod fs;
+mod rng_state;
 mod seed;
 
-pub use fs::{replace_dir, write_atomic};
+pub use fs::{recover_replaced_dir, replace_dir, write_atomic};
+pub use rng_state::{RngState, RNG_STATE_BYTES};
 pub use seed::{derive_seed, Stream};
 
 use sha2::{Digest, Sha256};
