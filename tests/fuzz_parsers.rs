@@ -70,7 +70,7 @@ fn mutate(input: &[u8], tokens: &[&str], rng: &mut ChaCha8Rng) -> Vec<u8> {
 }
 
 /// Runs `target` on mutations of `seeds` for the configured time; returns the iterations run.
-fn fuzz(name: &str, seeds: &[Vec<u8>], tokens: &[&str], target: impl Fn(&[u8])) -> usize {
+fn fuzz(name: &str, seeds: &[Vec<u8>], tokens: &[&str], mut target: impl FnMut(&[u8])) -> usize {
     let deadline = Instant::now() + Duration::from_secs_f64(seconds());
     let mut iteration = 0u64;
     let mut failure = None;
@@ -229,5 +229,46 @@ fn fuzz_policy_directories() {
     fuzz("policy-masks", std::slice::from_ref(&masks), &["\u{0}", "{\"", "\"}", "F32"], |input| {
         std::fs::write(dir.path().join("masks.safetensors"), input).unwrap();
         let _ = quadcl::nn::checkpoint::load_policy(dir.path());
+    });
+}
+
+#[test]
+fn fuzz_training_states() {
+    // A real training state (tiny networks, 3 robots, 2 iterations: checkpoints at both),
+    // then its bytes mutated: reading must not panic, and what reads is restored into the
+    // learner and envs of that checkpoint, which may refuse it but must not panic either.
+    use quadcl::config::{Config, PpoConfig};
+    use quadcl::rl::{load_resume_point, train_from, PpoLearner, SimTrainEnv, TrainingState, TRAINING_STATE_FILE};
+    let mut cfg = Config {
+        ppo: PpoConfig {
+            num_envs: 3,
+            steps_per_env: 8,
+            iterations: 2,
+            checkpoint_every: 1,
+            cenet_decoder_hidden: vec![4],
+            cenet_latent_dim: 2,
+            ..PpoConfig::default()
+        },
+        ..Config::default()
+    };
+    cfg.env.episode_s = 0.1;
+    cfg.net.actor.hidden = vec![4];
+    cfg.net.critic.hidden = vec![4];
+    cfg.net.cenet.hidden = vec![4];
+    let none = quadcl::sim::Perturbation::none();
+    let run = tempfile::tempdir().unwrap();
+    let mut env = SimTrainEnv::new(&cfg.env, &none, 3, cfg.seed).unwrap();
+    train_from(&cfg, "none", &mut env, run.path(), false, None).unwrap();
+    let state = std::fs::read(run.path().join("checkpoint").join(TRAINING_STATE_FILE)).unwrap();
+    let point = load_resume_point(&cfg, "none", run.path()).unwrap();
+    let mut learner = PpoLearner::new(cfg.ppo.clone(), point.agent, 3, 0).unwrap();
+    let mut env = SimTrainEnv::new(&cfg.env, &none, 3, cfg.seed).unwrap();
+    let path = run.path().join("fuzzed.safetensors");
+    let tokens = &["\u{0}", "\u{ff}", "{\"", "\"}", "F32", "U64", "U8", "F64", "[0]", "[99999999]", "adam.", ".step"];
+    fuzz("training-state", std::slice::from_ref(&state), tokens, |input| {
+        std::fs::write(&path, input).unwrap();
+        if let Ok(read) = TrainingState::read(&path) {
+            let _ = read.restore(&mut learner, &mut env);
+        }
     });
 }

@@ -36,9 +36,9 @@ fn metric_rows(dir: &std::path::Path) -> Vec<serde_json::Value> {
 
 /// Resumes the run in `dir` with `cfg` and trains it to `cfg.ppo.iterations`.
 fn resume(cfg: &Config, dir: &std::path::Path) -> quadcl::rl::TrainSummary {
-    let (agent, state) = load_resume_point(cfg, "none", dir).unwrap();
-    let mut env = ToyEnv::new(16, 10, derive_seed(cfg.seed, Stream::Trainer(state.iteration)));
-    train_from(cfg, "none", &mut env, dir, false, Some((agent, state))).unwrap()
+    let point = load_resume_point(cfg, "none", dir).unwrap();
+    let mut env = ToyEnv::new(16, 10, derive_seed(cfg.seed, Stream::Trainer(point.state.iteration)));
+    train_from(cfg, "none", &mut env, dir, false, Some(point)).unwrap()
 }
 
 #[test]
@@ -53,11 +53,13 @@ fn a_resumed_run_goes_on_from_its_last_checkpoint() {
     assert_eq!(before.len(), 4);
 
     let longer = toy_config(8);
-    let (agent, state) = load_resume_point(&longer, "none", dir.path()).unwrap();
-    assert_eq!(state.iteration, 4);
+    let point = load_resume_point(&longer, "none", dir.path()).unwrap();
+    assert_eq!(point.state.iteration, 4);
+    let agent = &point.agent;
     assert!(!agent.in_recall() && agent.actor().current_task() == Some(0), "the task must still be in training");
-    let mut env = ToyEnv::new(16, 10, derive_seed(longer.seed, Stream::Trainer(state.iteration)));
-    let summary = train_from(&longer, "none", &mut env, dir.path(), false, Some((agent, state))).unwrap();
+    assert!(!point.is_exact(), "the toy environments keep no replays");
+    let mut env = ToyEnv::new(16, 10, derive_seed(longer.seed, Stream::Trainer(point.state.iteration)));
+    let summary = train_from(&longer, "none", &mut env, dir.path(), false, Some(point)).unwrap();
     assert_eq!(summary.iterations, 8);
 
     let after = metric_rows(dir.path());

@@ -28,6 +28,7 @@ pub struct TrainArgs {
     pub seed: Option<u64>,
     /// Go on from DIR/checkpoint/ (written every `ppo.checkpoint_every`
     /// iterations) with the same config; `--iterations` may raise the total.
+    /// The run goes on bit for bit as if it had not stopped (timing fields aside).
     #[arg(long, conflicts_with = "force")]
     pub resume: bool,
     /// Train anew into an --out that already holds a training run, replacing its results.
@@ -57,9 +58,12 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         );
     }
     let resume = if args.resume { Some(quadcl::rl::load_resume_point(&config, &task_name, &args.out)?) } else { None };
+    // An exact checkpoint restores every env's state over fresh ones; an older one reseeds them.
     let env_seed = match &resume {
-        Some((_, state)) => quadcl::util::derive_seed(config.seed, quadcl::util::Stream::Trainer(state.iteration)),
-        None => config.seed,
+        Some(point) if !point.is_exact() => {
+            quadcl::util::derive_seed(config.seed, quadcl::util::Stream::Trainer(point.state.iteration))
+        }
+        _ => config.seed,
     };
     let mut env = SimTrainEnv::new(&config.env, &task, config.ppo.num_envs, env_seed)?;
     let progress = std::io::stderr().is_terminal();

@@ -37,7 +37,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 mod dense;
-mod tensors;
+pub(crate) mod tensors;
 
 use tensors::{f32_raw, serialize, Raw, Reader};
 

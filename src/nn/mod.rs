@@ -41,7 +41,7 @@ pub use fused::{fused_mlp, matmul};
 pub use masked::{LayerIteration, MaskedLinear};
 pub use mlp::{FrozenWeights, MaskedMlp};
 pub use network::{AsNetworkRef, IterationNoise, Network, NetworkRef};
-pub use optim::{AdamConfig, MaskedAdam};
+pub use optim::{AdamConfig, MaskedAdam, Moments};
 pub use select::row_quota;
 pub use state::{ElementState, IllegalTransition, TaskId};
 pub use stats::{mask_report, LayerMasks, MaskReport, NetworkMasks, TaskMask};

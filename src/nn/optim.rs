@@ -38,11 +38,13 @@ impl Default for AdamConfig {
     }
 }
 
-#[derive(Debug)]
-struct Moments {
-    m: Vec<f32>,
-    v: Vec<f32>,
-    step: i32,
+/// One parameter's Adam state: first and second moments and the steps taken
+/// (what a training checkpoint keeps so that a resumed run steps alike).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Moments {
+    pub m: Vec<f32>,
+    pub v: Vec<f32>,
+    pub step: i32,
 }
 
 /// Adam over [`Param`]s, respecting their update masks.
@@ -97,6 +99,27 @@ impl MaskedAdam {
     /// variable under the same name, and old moments must not push the new task).
     pub fn reset(&mut self) {
         self.moments.clear();
+    }
+
+    /// Every parameter's moments, by parameter name.
+    pub fn moments(&self) -> &HashMap<String, Moments> {
+        &self.moments
+    }
+
+    /// Replaces every moment (from a training checkpoint); a moment whose two vectors differ
+    /// in length is an error, and one whose size no longer fits its parameter errors at the next step.
+    pub fn restore_moments(&mut self, moments: HashMap<String, Moments>) -> anyhow::Result<()> {
+        for (name, mom) in &moments {
+            anyhow::ensure!(
+                mom.m.len() == mom.v.len(),
+                "{name}: Adam moments of {} and {} elements",
+                mom.m.len(),
+                mom.v.len()
+            );
+            anyhow::ensure!(mom.step >= 0, "{name}: Adam step count {}", mom.step);
+        }
+        self.moments = moments;
+        Ok(())
     }
 
     /// Sets the learning rate (for schedules).

@@ -9,7 +9,7 @@
 //! Shapes (N = `num_envs`): observations (N, obs), privileged (N, priv),
 //! histories (N, history_len * obs, oldest first), actions (N, act).
 
-pub use crate::sim::{EpisodeSummary, VecStep};
+pub use crate::sim::{EpisodeReplay, EpisodeSummary, VecStep};
 
 /// Widths of an environment's vectors (also stored in a policy's manifest).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -45,5 +45,20 @@ pub trait TrainEnv {
     fn observe(&mut self, env: usize, observer: Box<dyn crate::sim::StepObserver>) -> anyhow::Result<()> {
         let _ = (env, observer);
         anyhow::bail!("this environment is not simulated: there is nothing to observe")
+    }
+    /// From now on keep what [`Self::replays`] needs (call before the first step); false
+    /// for environments that cannot (a checkpoint then restarts them afresh).
+    fn keep_replays(&mut self) -> anyhow::Result<bool> {
+        Ok(false)
+    }
+    /// Every environment's exact state as a replay of its current episode
+    /// ([`EpisodeReplay`]), for a checkpoint; None when none is kept.
+    fn replays(&self) -> anyhow::Result<Option<Vec<EpisodeReplay>>> {
+        Ok(None)
+    }
+    /// Puts every environment in the state of its replay (and keeps replays from then on).
+    fn restore(&mut self, replays: &[EpisodeReplay]) -> anyhow::Result<()> {
+        let _ = replays;
+        anyhow::bail!("this environment cannot be restored from a checkpoint")
     }
 }

@@ -13,6 +13,7 @@
 //! | `losses` | the PPO loss pieces (Gaussian log-prob/entropy, clipped surrogate, value loss, KL, adaptive lr) |
 //! | `cenet_loss` | the CENet's output split, reparameterisation and beta-VAE loss |
 //! | `trainer` | one task's training run: `metrics.jsonl`, checkpoints, policy directory |
+//! | `training_state` | what a checkpoint keeps beyond the policy so that a resume is exact (Adam, streams, envs) |
 //! | `metrics` | the [`Metrics`] of an iteration and the metric names every loop shares |
 //! | `progress` | what every training loop shares in reporting: the bar, the iteration line, the step and time counters |
 //! | `evaluate` | deterministic evaluation, one episode per env: the `quadcl eval` figures |
@@ -44,12 +45,13 @@ mod sim_env;
 mod test_tensors;
 mod toy_env;
 mod trainer;
+mod training_state;
 mod update_hooks;
 
 pub use acting::{ActOutput, ActingWeights};
 pub use acting_settings::{acting_settings_differences, ACTING_SETTINGS};
 pub use agent::Agent;
-pub use env::{EnvDims, EpisodeSummary, TrainEnv, VecStep};
+pub use env::{EnvDims, EpisodeReplay, EpisodeSummary, TrainEnv, VecStep};
 pub use evaluate::{evaluate, EvalReport};
 pub use gait::{record_gait, GaitReport, GaitSummary, HeldCommand};
 pub use metrics::{layer_metrics, names as metric_names, Metrics};
@@ -63,5 +65,6 @@ pub use progress::{iteration_line, iteration_summary, progress_bar, TrainingCloc
 pub use robot_view::{RobotFrame, RobotViewer};
 pub use sim_env::SimTrainEnv;
 pub use toy_env::ToyEnv;
-pub use trainer::{load_resume_point, train, train_from, TrainSummary, TrainerState};
+pub use trainer::{load_resume_point, train, train_from, ResumePoint, TrainSummary, TrainerState};
+pub use training_state::{TrainingState, TRAINING_STATE_FILE};
 pub use update_hooks::{apply_hooks, NoHooks, NoProbe, OutputSample, PolicyProbe, UpdateHooks};

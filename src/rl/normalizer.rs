@@ -56,6 +56,28 @@ impl RunningNormalizer {
     pub fn count(&self) -> f64 {
         self.count
     }
+    /// Mean, variance and row count at full precision (a training checkpoint's copy: the
+    /// policy keeps f32, and a run resumed from f32 statistics would drift from the original).
+    pub fn exact(&self) -> (&[f64], &[f64], f64) {
+        (&self.mean, &self.var, self.count)
+    }
+    /// Takes statistics saved with [`Self::exact`]; the width must match and every value be finite.
+    pub fn restore_exact(&mut self, mean: Vec<f64>, var: Vec<f64>, count: f64) -> anyhow::Result<()> {
+        let dim = self.dim();
+        anyhow::ensure!(
+            mean.len() == dim && var.len() == dim,
+            "normaliser: {} means and {} variances for {dim} features",
+            mean.len(),
+            var.len()
+        );
+        anyhow::ensure!(
+            mean.iter().all(|m| m.is_finite()) && var.iter().all(|v| v.is_finite() && *v >= 0.0),
+            "normaliser: a mean or variance is not finite (or a variance < 0)"
+        );
+        anyhow::ensure!(count.is_finite() && count >= 0.0, "normaliser: row count {count}");
+        (self.mean, self.var, self.count) = (mean, var, count);
+        Ok(())
+    }
     pub fn is_frozen(&self) -> bool {
         self.frozen
     }

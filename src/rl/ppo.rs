@@ -39,7 +39,7 @@ use std::collections::VecDeque;
 use std::time::Instant;
 
 /// Episodes kept for the episode statistics (`charts/episodic_return`, ...).
-const EPISODE_WINDOW: usize = 100;
+pub(crate) const EPISODE_WINDOW: usize = 100;
 
 /// PPO over an [`Agent`], with its optimiser, rollout buffer and random stream.
 pub struct PpoLearner {
@@ -47,10 +47,10 @@ pub struct PpoLearner {
     pub(crate) agent: Agent,
     pub(crate) optimizer: MaskedAdam,
     buffer: RolloutBuffer,
-    rng: ChaCha8Rng,
+    pub(crate) rng: ChaCha8Rng,
     /// (act,) the policy's log-std when the rollout was collected.
     rollout_log_std: Option<Tensor>,
-    recent_episodes: VecDeque<EpisodeSummary>,
+    pub(crate) recent_episodes: VecDeque<EpisodeSummary>,
     /// Iterations completed.
     pub(crate) iteration: usize,
 }

@@ -55,4 +55,17 @@ impl TrainEnv for SimTrainEnv {
     fn observe(&mut self, env: usize, observer: Box<dyn crate::sim::StepObserver>) -> anyhow::Result<()> {
         self.inner.observe(env, observer)
     }
+
+    fn keep_replays(&mut self) -> anyhow::Result<bool> {
+        self.inner.keep_replays()?;
+        Ok(true)
+    }
+
+    fn replays(&self) -> anyhow::Result<Option<Vec<crate::sim::EpisodeReplay>>> {
+        self.inner.replays().map(Some)
+    }
+
+    fn restore(&mut self, replays: &[crate::sim::EpisodeReplay]) -> anyhow::Result<()> {
+        self.inner.restore(replays)
+    }
 }

@@ -9,17 +9,23 @@
 //!   belong to the task). The base policy is task 0 of the masked learner.
 //! - `checkpoint/`: every `ppo.checkpoint_every` iterations, the run in
 //!   progress (networks with their soft scores, log-std, normaliser
-//!   statistics, and `trainer.json`: iterations done, learning rate, env
-//!   steps). The folder is replaced as a whole (written beside, then renamed),
-//!   so an interruption leaves the previous checkpoint intact.
+//!   statistics, `trainer.json`: iterations done, learning rate, env steps,
+//!   and `training_state.safetensors`: Adam's moments, the random streams,
+//!   full-precision statistics and every env's state, see
+//!   [`super::training_state`]). The folder is replaced as a whole (written
+//!   beside, then renamed), so an interruption leaves the previous checkpoint intact.
 //!
 //! `--resume` goes on from `checkpoint/` (with `--iterations` equal to the
-//! checkpoint's, it only ends the task and writes `policy/`): the networks, statistics, learning
-//! rate and iteration count are restored, metrics rows after the checkpoint
-//! are dropped; Adam's moments restart, and the environments and the
-//! learner's random stream start afresh from seeds derived from (seed,
-//! iteration). A resumed run is deterministic, but not bit-identical to one
-//! that never stopped.
+//! checkpoint's, it only ends the task and writes `policy/`); metrics rows
+//! after the checkpoint are dropped. The run then goes on bit for bit as if
+//! it had never stopped: the same policy and the same metrics, timing fields
+//! aside (each env re-runs its current episode from its stream to reach its
+//! state; see `sim::EpisodeReplay`). A checkpoint without
+//! `training_state.safetensors` (written before it existed, or by an
+//! environment that keeps no replays) resumes as before: networks,
+//! statistics, learning rate and iteration count restored, Adam's moments
+//! and the environments afresh from seeds derived from (seed, iteration):
+//! deterministic, not bit-identical.
 
 use super::agent::Agent;
 use super::env::TrainEnv;
@@ -27,6 +33,7 @@ use super::metrics::Metrics;
 use super::policy_dir::{load_training_checkpoint, save_policy, PolicyInfo};
 use super::ppo::PpoLearner;
 use super::progress::{iteration_summary, progress_bar, TrainingClock};
+use super::training_state::{TrainingState, TRAINING_STATE_FILE};
 use crate::config::Config;
 use crate::util::{derive_seed, replace_dir, write_atomic, Stream};
 use anyhow::Context;
@@ -62,6 +69,26 @@ pub struct TrainerState {
     pub env_steps: usize,
     /// Wall-clock seconds of training so far.
     pub wall_s: f64,
+    /// SHA-256 of `training_state.safetensors` (absent in checkpoints from before it existed):
+    /// a damaged or edited state is refused, not resumed into a different run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub training_state_sha256: Option<String>,
+}
+
+/// Where `--resume` goes on from: the agent, where the run was, and (in checkpoints
+/// that have it) the rest of the run's state, which makes the resume exact.
+#[derive(Debug)]
+pub struct ResumePoint {
+    pub agent: Agent,
+    pub state: TrainerState,
+    pub training: Option<TrainingState>,
+}
+
+impl ResumePoint {
+    /// Whether the run goes on bit for bit (the environments' state included).
+    pub fn is_exact(&self) -> bool {
+        self.training.as_ref().is_some_and(TrainingState::has_envs)
+    }
 }
 
 /// Trains a fresh agent on `env` for `config.ppo.iterations` iterations and
@@ -81,8 +108,9 @@ pub fn train(
 /// from `ppo.iterations` (which may grow) and the mask settings that act only
 /// when the task ends (`private_share`, `reinit`, `reinit_scale`: METHOD.md
 /// 2.4), so a finished run can be ended again with other ones; errors name the folder.
-pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Result<(Agent, TrainerState)> {
+pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Result<ResumePoint> {
     let dir = out.join("checkpoint");
+    crate::util::recover_replaced_dir(&dir)?;
     anyhow::ensure!(dir.is_dir(), "{}: no checkpoint to resume from (is `ppo.checkpoint_every` 0?)", dir.display());
     let loaded = load_training_checkpoint(&dir)?;
     anyhow::ensure!(
@@ -114,26 +142,46 @@ pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Res
     );
     let mut agent = loaded.agent;
     agent.set_end_of_task(&config.net.mask)?;
-    Ok((agent, state))
+    let path = dir.join(TRAINING_STATE_FILE);
+    let training = match (path.exists(), &state.training_state_sha256) {
+        (false, None) => None,
+        (false, Some(_)) => anyhow::bail!("{}: missing, though trainer.json names its digest", path.display()),
+        (true, None) => anyhow::bail!("{}: trainer.json names no digest for it", path.display()),
+        (true, Some(digest)) => {
+            let bytes = std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?;
+            anyhow::ensure!(
+                &crate::util::sha256_hex(&bytes) == digest,
+                "{}: its content does not match the digest in trainer.json (damaged or edited)",
+                path.display()
+            );
+            Some(TrainingState::from_bytes(&path, &bytes)?)
+        }
+    };
+    Ok(ResumePoint { agent, state, training })
 }
 
 /// Writes `checkpoint/` as a whole (see [`replace_dir`]), so a crash leaves
 /// the previous checkpoint intact.
 fn save_checkpoint(
     learner: &PpoLearner,
+    env: &dyn TrainEnv,
     task: &str,
     info: &PolicyInfo,
     state: &TrainerState,
     out: &Path,
 ) -> anyhow::Result<()> {
+    let training = TrainingState::of(learner, env)?.to_bytes()?;
+    let state = TrainerState { training_state_sha256: Some(crate::util::sha256_hex(&training)), ..state.clone() };
     replace_dir(&out.join("checkpoint"), |dir| {
         save_policy(&learner.agent, &[task.to_string()], info, dir)?;
-        write_atomic(&dir.join("trainer.json"), serde_json::to_string_pretty(state)?.as_bytes())
+        write_atomic(&dir.join(TRAINING_STATE_FILE), &training)?;
+        write_atomic(&dir.join("trainer.json"), serde_json::to_string_pretty(&state)?.as_bytes())
     })
 }
 
 /// [`train`], or with `resume` (from [`load_resume_point`]) the same run
-/// continued from its checkpoint; `env` must then be seeded with
+/// continued from its checkpoint; `env` must be fresh (not stepped yet), and
+/// for a checkpoint that is not exact ([`ResumePoint::is_exact`]) seeded with
 /// `derive_seed(config.seed, Stream::Trainer(iteration))`.
 pub fn train_from(
     config: &Config,
@@ -141,10 +189,14 @@ pub fn train_from(
     env: &mut dyn TrainEnv,
     out: &Path,
     progress: bool,
-    resume: Option<(Agent, TrainerState)>,
+    resume: Option<ResumePoint>,
 ) -> anyhow::Result<TrainSummary> {
     let cfg = &config.ppo;
     cfg.validate()?;
+    // Checkpoints keep each env's episode so far, so that a resume is exact.
+    if cfg.checkpoint_every > 0 {
+        env.keep_replays()?;
+    }
     write_atomic(&out.join("config.toml"), config.to_toml_string().as_bytes())?;
     let (mut learner, done, mut log) = match resume {
         None => {
@@ -156,7 +208,7 @@ pub fn train_from(
                 String::new(),
             )
         }
-        Some((agent, state)) => {
+        Some(ResumePoint { agent, state, training }) => {
             let mut learner = PpoLearner::new(
                 cfg.clone(),
                 agent,
@@ -165,6 +217,22 @@ pub fn train_from(
             )?;
             learner.iteration = state.iteration;
             learner.optimizer.set_learning_rate(state.learning_rate);
+            match training {
+                Some(training) => {
+                    let (exact, steps) = (training.has_envs(), training.replay_steps());
+                    let dir = out.join("checkpoint");
+                    training.restore(&mut learner, env).with_context(|| format!("{}: resuming", dir.display()))?;
+                    if exact {
+                        tracing::info!("resumed exactly at iteration {} ({steps} env steps replayed)", state.iteration);
+                    } else {
+                        tracing::warn!("{}: these environments keep no state; they start afresh", dir.display());
+                    }
+                }
+                None => tracing::warn!(
+                    "{}: no {TRAINING_STATE_FILE} (an older checkpoint): Adam and the environments start afresh, so the run is deterministic but not bit-identical to one that never stopped",
+                    out.join("checkpoint").display()
+                ),
+            }
             let path = out.join("metrics.jsonl");
             let text = std::fs::read_to_string(&path).unwrap_or_default();
             let kept: String = text.lines().take(state.iteration).flat_map(|l| [l, "\n"]).collect();
@@ -214,8 +282,9 @@ pub fn train_from(
                 learning_rate: learner.optimizer.learning_rate(),
                 env_steps: clock.env_steps(),
                 wall_s: clock.wall_s(),
+                training_state_sha256: None,
             };
-            save_checkpoint(&learner, task, &info_at(it + 1), &state, out)?;
+            save_checkpoint(&learner, env, task, &info_at(it + 1), &state, out)?;
         }
         if cfg.log_every > 0 && (it % cfg.log_every == 0 || last) {
             bar.set_message(iteration_summary(&m));

@@ -8,17 +8,27 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// One tensor to write: dtype, shape and little-endian bytes.
-pub(super) struct Raw {
+pub(crate) struct Raw {
     pub dtype: Dtype,
     pub shape: Vec<usize>,
     pub bytes: Vec<u8>,
 }
 
-pub(super) fn f32_raw(values: &[f32], shape: Vec<usize>) -> Raw {
+pub(crate) fn f32_raw(values: &[f32], shape: Vec<usize>) -> Raw {
     Raw { dtype: Dtype::F32, shape, bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect() }
 }
 
-pub(super) fn serialize(
+/// Little-endian bytes of `values` (f64, u64, i64 ...) as one tensor of `dtype`.
+pub(crate) fn le_raw<const N: usize, T: Copy>(
+    dtype: Dtype,
+    values: &[T],
+    shape: Vec<usize>,
+    to_le: impl Fn(T) -> [u8; N],
+) -> Raw {
+    Raw { dtype, shape, bytes: values.iter().flat_map(|v| to_le(*v)).collect() }
+}
+
+pub(crate) fn serialize(
     tensors: &BTreeMap<String, Raw>,
     metadata: Option<std::collections::HashMap<String, String>>,
 ) -> anyhow::Result<Vec<u8>> {
@@ -29,26 +39,26 @@ pub(super) fn serialize(
     Ok(safetensors::serialize(views, metadata)?)
 }
 
-pub(super) struct Reader<'a> {
+pub(crate) struct Reader<'a> {
     file: String,
     st: SafeTensors<'a>,
 }
 
 impl<'a> Reader<'a> {
-    pub(super) fn new(file: &Path, bytes: &'a [u8]) -> anyhow::Result<Self> {
+    pub(crate) fn new(file: &Path, bytes: &'a [u8]) -> anyhow::Result<Self> {
         let st = SafeTensors::deserialize(bytes)
             .map_err(|e| anyhow::anyhow!("{}: not a valid safetensors file: {e:?}", file.display()))?;
         Ok(Self { file: file.display().to_string(), st })
     }
 
-    pub(super) fn raw(&self, name: &str, dtype: Dtype, shape: &[usize]) -> anyhow::Result<&'a [u8]> {
+    pub(crate) fn raw(&self, name: &str, dtype: Dtype, shape: &[usize]) -> anyhow::Result<&'a [u8]> {
         let t = self.st.tensor(name).map_err(|_| anyhow::anyhow!("{}: missing tensor {name}", self.file))?;
         ensure!(t.dtype() == dtype, "{}: tensor {name} has dtype {:?}, expected {dtype:?}", self.file, t.dtype());
         ensure!(t.shape() == shape, "{}: tensor {name} has shape {:?}, expected {shape:?}", self.file, t.shape());
         Ok(t.data())
     }
 
-    pub(super) fn f32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f32>> {
+    pub(crate) fn f32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f32>> {
         Ok(self
             .raw(name, Dtype::F32, shape)?
             .chunks_exact(4)
@@ -57,7 +67,7 @@ impl<'a> Reader<'a> {
     }
 
     /// "{layer}.log_sigma", or ln of "{layer}.sigma" in files from before sigma was trained in log space.
-    pub(super) fn log_sigma(&self, layer: &str) -> anyhow::Result<Vec<f32>> {
+    pub(crate) fn log_sigma(&self, layer: &str) -> anyhow::Result<Vec<f32>> {
         let name = format!("{layer}.log_sigma");
         if self.st.tensor(&name).is_ok() {
             return self.f32s(&name, &[1]);
@@ -71,7 +81,7 @@ impl<'a> Reader<'a> {
         Ok(sigma.iter().map(|s| s.ln()).collect())
     }
 
-    pub(super) fn u32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u32>> {
+    pub(crate) fn u32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u32>> {
         Ok(self
             .raw(name, Dtype::U32, shape)?
             .chunks_exact(4)
@@ -79,7 +89,28 @@ impl<'a> Reader<'a> {
             .collect())
     }
 
-    pub(super) fn shape_of(&self, name: &str) -> anyhow::Result<Vec<usize>> {
+    pub(crate) fn f64s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f64>> {
+        Ok(self
+            .raw(name, Dtype::F64, shape)?
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or_default()))
+            .collect())
+    }
+
+    pub(crate) fn u64s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u64>> {
+        Ok(self
+            .raw(name, Dtype::U64, shape)?
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
+            .collect())
+    }
+
+    /// The names of the file's tensors.
+    pub(crate) fn names(&self) -> Vec<&str> {
+        self.st.names()
+    }
+
+    pub(crate) fn shape_of(&self, name: &str) -> anyhow::Result<Vec<usize>> {
         Ok(self.st.tensor(name).map_err(|_| anyhow::anyhow!("{}: missing tensor {name}", self.file))?.shape().to_vec())
     }
 }

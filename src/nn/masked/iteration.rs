@@ -104,6 +104,25 @@ impl MaskedLinear {
         self.training.as_ref().and_then(|t| t.mask_churn)
     }
 
+    /// The previous iteration's hard mask (the reference of the churn), while a task trains.
+    pub fn previous_selection(&self) -> Option<&[bool]> {
+        self.training.as_ref().and_then(|t| t.previous_selection.as_deref())
+    }
+
+    /// Restores [`Self::previous_selection`] (from a training checkpoint): out * in flags.
+    pub fn set_previous_selection(&mut self, selected: Vec<bool>) -> anyhow::Result<()> {
+        let n = self.out_dim * self.in_dim;
+        anyhow::ensure!(
+            selected.len() == n,
+            "{}: a previous selection of {} flags for {n} elements",
+            self.name,
+            selected.len()
+        );
+        let t = self.training.as_mut().with_context(|| format!("{}: no task in training", self.name))?;
+        t.previous_selection = Some(selected);
+        Ok(())
+    }
+
     /// The iteration's sigma (in `sigma_scale` units), the rows' mean score gap at the cut
     /// (score units; None in absolute units) and the mask churn; None outside a new task's
     /// training (a repeat's mask is fixed) and for the mask baselines.
