@@ -4,6 +4,7 @@
 //!
 //! Every field has a default; a TOML `[env]` table only names what it changes.
 
+use super::bounds::{self, Interval, NON_NEGATIVE, POSITIVE, POSITIVE_UNIT};
 use super::robot::RobotConfig;
 use serde::{Deserialize, Serialize};
 
@@ -16,22 +17,22 @@ pub struct EnvConfig {
     /// Physics step in seconds. Chosen by measurement (README, "Simulator"):
     /// with the PD law implicit in rapier's multibody dynamics, 0.01 s stands
     /// and moves like 0.005 s (height, tracking, falls) at twice the speed;
-    /// 0.02 s lets feet sink up to 6 cm and changes how the robot falls.
+    /// 0.02 s lets feet sink up to 6 cm and changes how the robot falls. In (0, 0.1].
     pub physics_dt: f32,
-    /// Physics steps per policy step; policy rate = 1 / (physics_dt * decimation) = 50 Hz.
+    /// Physics steps per policy step (1 to 1000); policy rate = 1 / (physics_dt * decimation) = 50 Hz.
     pub decimation: usize,
     /// Constraint-solver iterations per physics step (rapier's `num_solver_iterations`).
     /// The PD motors do not go through the solver (implicit joint springs and
     /// damping), so one iteration (contacts and limits only) is enough; each
-    /// extra one costs about as much as the rest of the step.
+    /// extra one costs about as much as the rest of the step. 1 to 100.
     pub solver_iterations: usize,
     /// Proportional gain of the joint PD motors, N m / rad.
     pub kp: f32,
     /// Derivative gain of the joint PD motors, N m s / rad.
     pub kd: f32,
-    /// Joint target = default pose + action_scale * action.
+    /// Joint target = default pose + action_scale * action (> 0).
     pub action_scale: f32,
-    /// Actions are clipped to [-clip_actions, clip_actions] before use.
+    /// Actions are clipped to [-clip_actions, clip_actions] before use (> 0).
     pub clip_actions: f32,
     /// Trunk height at reset, metres.
     pub start_height: f32,
@@ -46,17 +47,17 @@ pub struct EnvConfig {
     pub default_thigh_rear: f32,
     /// Default calf angle of every leg, rad.
     pub default_calf: f32,
-    /// Episode length, seconds (time-out => truncated).
+    /// Episode length, seconds (time-out => truncated): at least one control step, at most 3600.
     pub episode_s: f32,
     /// Commands are resampled every this many seconds.
     pub command_resample_s: f32,
-    /// Forward velocity command range, m/s.
+    /// Forward velocity command range, m/s (within [-10, 10], as every command range).
     pub cmd_vx: [f32; 2],
     /// Lateral velocity command range, m/s.
     pub cmd_vy: [f32; 2],
     /// Yaw rate command range, rad/s.
     pub cmd_wz: [f32; 2],
-    /// Terminate when the trunk's up axis tilts more than this from vertical, rad.
+    /// Terminate when the trunk's up axis tilts more than this from vertical, rad, in (0, pi].
     pub max_tilt_rad: f32,
     /// Ground friction coefficient range (uniform), randomised per episode.
     pub friction_range: [f32; 2],
@@ -72,7 +73,7 @@ pub struct EnvConfig {
     pub push_max_vel: f32,
     /// Standard deviation of the Gaussian added to a `noise` leg's actions (action units).
     pub noise_std: f32,
-    /// Soft joint limits: this fraction of each joint's range, centred.
+    /// Soft joint limits: this fraction of each joint's range, centred, in (0, 1].
     pub soft_limit_fraction: f32,
     /// Tracking reward width sigma: exp(-err^2 / sigma).
     pub tracking_sigma: f32,
@@ -80,7 +81,7 @@ pub struct EnvConfig {
     pub height_target: f32,
     /// Feet clearance target height, metres.
     pub feet_height_target: f32,
-    /// Named weights of the Table 1 reward terms (each also times the policy dt).
+    /// Named weights of the Table 1 reward terms (each also times the policy dt; finite).
     pub rewards: RewardWeights,
     /// Per-joint standing pose and gains, leg and foot names, by name pattern
     /// (`[env.robot]`, see [`RobotConfig`]); empty for the A1.
@@ -178,85 +179,101 @@ impl Default for EnvConfig {
     }
 }
 
+/// The largest physics step, seconds: 0.02 s already lets the A1's feet sink
+/// up to 6 cm (README, "Simulator").
+pub const MAX_PHYSICS_DT: f32 = 0.1;
+/// The most physics steps per policy step.
+pub const MAX_DECIMATION: usize = 1000;
+/// The most constraint-solver iterations per physics step (each costs about a step).
+pub const MAX_SOLVER_ITERATIONS: usize = 100;
+/// The longest episode, seconds (an hour; the shipped runs use 20 s).
+pub const MAX_EPISODE_S: f32 = 3600.0;
+/// The largest command, m/s or rad/s, sampled (`env.cmd_*`) or held (`--vx`,
+/// `--vy`, `--wz`): the A1 runs at about 3.5 m/s.
+pub const MAX_COMMAND: f32 = 10.0;
+
+/// Checks a commanded velocity or yaw rate (`what` names the key or option).
+pub fn check_command(what: &str, value: f32) -> anyhow::Result<()> {
+    bounds::check(what, value, Interval::Closed((-MAX_COMMAND).into(), MAX_COMMAND.into()))
+}
+
+impl RewardWeights {
+    /// Every weight with its key.
+    pub fn named(&self) -> [(&'static str, f32); 12] {
+        [
+            ("lin_vel_tracking", self.lin_vel_tracking),
+            ("ang_vel_tracking", self.ang_vel_tracking),
+            ("lin_vel_z", self.lin_vel_z),
+            ("ang_vel_xy", self.ang_vel_xy),
+            ("orientation", self.orientation),
+            ("joint_limits", self.joint_limits),
+            ("torques", self.torques),
+            ("joint_acc", self.joint_acc),
+            ("body_height", self.body_height),
+            ("feet_clearance", self.feet_clearance),
+            ("collision", self.collision),
+            ("action_rate", self.action_rate),
+        ]
+    }
+}
+
 impl EnvConfig {
     /// Seconds per policy step (physics_dt * decimation).
     pub fn policy_dt(&self) -> f32 {
         self.physics_dt * self.decimation as f32
     }
 
-    /// Checks the values that would make the simulation meaningless.
+    /// Checks the values that would make the simulation meaningless; errors name the key.
     pub fn validate(&self) -> anyhow::Result<()> {
+        let key = |name: &str| format!("env.{name}");
+        bounds::check("env.physics_dt", self.physics_dt, Interval::OpenClosed(0.0, MAX_PHYSICS_DT.into()))?;
+        bounds::check_count("env.decimation", self.decimation, 1, MAX_DECIMATION)?;
+        bounds::check_count("env.solver_iterations", self.solver_iterations, 1, MAX_SOLVER_ITERATIONS)?;
+        bounds::check("env.episode_s", self.episode_s, Interval::OpenClosed(0.0, MAX_EPISODE_S.into()))?;
         anyhow::ensure!(
-            self.physics_dt > 0.0 && self.physics_dt.is_finite(),
-            "env.physics_dt must be > 0, got {}",
-            self.physics_dt
+            self.episode_s >= self.policy_dt(),
+            "env.episode_s = {} is shorter than one control step (env.physics_dt * env.decimation = {} s)",
+            self.episode_s,
+            self.policy_dt()
         );
-        anyhow::ensure!(self.decimation >= 1, "env.decimation must be >= 1, got {}", self.decimation);
-        anyhow::ensure!(self.solver_iterations >= 1, "env.solver_iterations must be >= 1");
-        anyhow::ensure!(self.episode_s > 0.0, "env.episode_s must be > 0, got {}", self.episode_s);
-        for (name, r) in [
-            ("cmd_vx", self.cmd_vx),
-            ("cmd_vy", self.cmd_vy),
-            ("cmd_wz", self.cmd_wz),
-            ("friction_range", self.friction_range),
-            ("added_mass_range", self.added_mass_range),
-            ("motor_strength_range", self.motor_strength_range),
+        let command = Interval::Closed((-MAX_COMMAND).into(), MAX_COMMAND.into());
+        for (name, r, interval) in [
+            ("cmd_vx", self.cmd_vx, command),
+            ("cmd_vy", self.cmd_vy, command),
+            ("cmd_wz", self.cmd_wz, command),
+            ("friction_range", self.friction_range, NON_NEGATIVE),
+            ("added_mass_range", self.added_mass_range, Interval::Finite),
+            // A factor on the motors' gains: 0 or less leaves the legs limp.
+            ("motor_strength_range", self.motor_strength_range, POSITIVE),
         ] {
-            anyhow::ensure!(
-                r[0] <= r[1] && r[0].is_finite() && r[1].is_finite(),
-                "env.{name} must be finite [low, high] with low <= high, got {r:?}"
-            );
+            bounds::check_range(&key(name), r, interval)?;
         }
-        anyhow::ensure!(
-            self.motor_strength_range[0] > 0.0,
-            "env.motor_strength_range must be > 0 (a factor on the motors' gains), got {:?}",
-            self.motor_strength_range
-        );
-        anyhow::ensure!(
-            self.friction_range[0] >= 0.0,
-            "env.friction_range must be >= 0, got {:?}",
-            self.friction_range
-        );
-        anyhow::ensure!(
-            self.noise_std >= 0.0 && self.noise_std.is_finite(),
-            "env.noise_std must be finite and >= 0, got {}",
-            self.noise_std
-        );
-        for (name, v) in
-            [("kp", self.kp), ("kd", self.kd), ("action_scale", self.action_scale), ("clip_actions", self.clip_actions)]
-        {
-            anyhow::ensure!(v.is_finite() && v >= 0.0, "env.{name} must be finite and >= 0, got {v}");
-        }
-        anyhow::ensure!(self.kp > 0.0, "env.kp must be > 0 (the PD spring), got {}", self.kp);
-        anyhow::ensure!(
-            self.start_height.is_finite() && self.start_height > 0.0,
-            "env.start_height must be > 0, got {}",
-            self.start_height
-        );
-        for (name, v) in [
-            ("push_interval_s", self.push_interval_s),
-            ("push_max_vel", self.push_max_vel),
-            ("soft_limit_fraction", self.soft_limit_fraction),
-            ("command_resample_s", self.command_resample_s),
+        for (name, v, interval) in [
+            ("kp", self.kp, POSITIVE),
+            ("kd", self.kd, NON_NEGATIVE),
+            // 0 makes every action the default pose: nothing a policy does moves the robot.
+            ("action_scale", self.action_scale, POSITIVE),
+            ("clip_actions", self.clip_actions, POSITIVE),
+            ("start_height", self.start_height, POSITIVE),
+            ("command_resample_s", self.command_resample_s, NON_NEGATIVE),
+            ("max_tilt_rad", self.max_tilt_rad, Interval::OpenClosed(0.0, std::f64::consts::PI)),
+            ("push_interval_s", self.push_interval_s, NON_NEGATIVE),
+            ("push_max_vel", self.push_max_vel, NON_NEGATIVE),
+            ("noise_std", self.noise_std, NON_NEGATIVE),
+            ("soft_limit_fraction", self.soft_limit_fraction, POSITIVE_UNIT),
+            ("tracking_sigma", self.tracking_sigma, POSITIVE),
+            ("height_target", self.height_target, POSITIVE),
+            ("feet_height_target", self.feet_height_target, NON_NEGATIVE),
+            ("default_hip_left", self.default_hip_left, Interval::Finite),
+            ("default_hip_right", self.default_hip_right, Interval::Finite),
+            ("default_thigh_front", self.default_thigh_front, Interval::Finite),
+            ("default_thigh_rear", self.default_thigh_rear, Interval::Finite),
+            ("default_calf", self.default_calf, Interval::Finite),
         ] {
-            anyhow::ensure!(v.is_finite() && v >= 0.0, "env.{name} must be finite and >= 0, got {v}");
+            bounds::check(&key(name), v, interval)?;
         }
-        anyhow::ensure!(
-            self.tracking_sigma.is_finite() && self.tracking_sigma > 0.0,
-            "env.tracking_sigma must be > 0, got {}",
-            self.tracking_sigma
-        );
-        for (name, v) in [
-            ("max_tilt_rad", self.max_tilt_rad),
-            ("height_target", self.height_target),
-            ("feet_height_target", self.feet_height_target),
-            ("default_hip_left", self.default_hip_left),
-            ("default_hip_right", self.default_hip_right),
-            ("default_thigh_front", self.default_thigh_front),
-            ("default_thigh_rear", self.default_thigh_rear),
-            ("default_calf", self.default_calf),
-        ] {
-            anyhow::ensure!(v.is_finite(), "env.{name} must be finite, got {v}");
+        for (name, w) in self.rewards.named() {
+            bounds::check(&key(&format!("rewards.{name}")), w, Interval::Finite)?;
         }
         self.robot.validate()?;
         if !self.robot.default_pose.is_empty() {

@@ -2,12 +2,17 @@
 //! tree that loads from a TOML file under `scenes/`.
 //!
 //! One file per concern: [`env`](mod@env) (the simulated robot and its rewards),
-//! [`net`] (masked networks and the method's mask settings), [`ppo`] (the
-//! learner), [`robot`] (per-joint robot settings by name pattern). A TOML
-//! file only names what it changes; every table and key is optional, and an
-//! unknown key is an error that names the file and the key.
+//! [`net`] (network sizes), [`mask`] (the method's mask settings), [`ppo`] (the
+//! learner), [`robot`] (per-joint robot settings by name pattern), and
+//! [`bounds`], the one check per kind of bound that every key and command-line
+//! option goes through. A TOML file only names what it changes; every table and
+//! key is optional, and an unknown key is an error that names the file and the
+//! key. Every number is checked when a file loads: finite, in its documented
+//! range, and consistent with the others (see each `validate`).
 
+pub mod bounds;
 pub mod env;
+pub mod mask;
 pub mod net;
 pub mod ppo;
 pub mod robot;

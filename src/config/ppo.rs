@@ -4,7 +4,8 @@
 //! (Nahrendra et al. 2023) for the CENet; every key can be set from the
 //! `[ppo]` table of a TOML file under `scenes/`.
 
-use super::net::MAX_WIDTH;
+use super::bounds::{self, Interval, NON_NEGATIVE, POSITIVE, POSITIVE_UNIT, UNIT};
+use super::net::{check_widths, MAX_WIDTH};
 use serde::{Deserialize, Serialize};
 
 /// The most environments one batch may have (`ppo.num_envs`, `[eval] episodes`,
@@ -17,6 +18,8 @@ pub const MAX_ROLLOUT: usize = 1 << 20;
 /// The most iterations a training may ask for: the curves keep a row per
 /// iteration, and at 0.1 s an iteration this is over eleven days.
 pub const MAX_ITERATIONS: usize = 10_000_000;
+/// The most passes over one rollout per update (legged_gym uses 5).
+pub const MAX_EPOCHS: usize = 1000;
 
 /// Checks a count of environments (`what` names the key or option): at
 /// least 1 and at most [`MAX_ENVS`]. Every place a batch size comes from
@@ -110,7 +113,7 @@ pub struct PpoConfig {
     pub cenet_loss_coef: f64,
     /// Clamp of the latent log-variance, for numerical safety (+-this).
     pub cenet_logvar_clamp: f64,
-    /// Write a metrics row (and refresh the progress bar) every this many iterations.
+    /// Write a metrics row (and refresh the progress bar) every this many iterations (at least 1).
     pub log_every: usize,
     /// Save a checkpoint of the run in progress (`checkpoint/` in the output
     /// folder) every this many iterations, so `quadcl train --resume` can go
@@ -169,71 +172,57 @@ impl PpoConfig {
         self.batch_size().div_ceil(self.minibatches.max(1))
     }
 
-    /// Checks the settings that would make training meaningless or panic.
-    /// Errors name the key and the expectation.
+    /// Checks the settings that would make training meaningless or panic, or that cannot fit
+    /// in memory. Errors name the key and the expectation.
     pub fn validate(&self) -> anyhow::Result<()> {
         check_env_count("ppo.num_envs", self.num_envs)?;
-        let positive = [
-            ("steps_per_env", self.steps_per_env),
-            ("epochs", self.epochs),
-            ("minibatches", self.minibatches),
-            ("cenet_latent_dim", self.cenet_latent_dim),
-        ];
-        for (key, value) in positive {
-            anyhow::ensure!(value > 0, "ppo.{key} must be > 0, got {value}");
-        }
+        bounds::check_count("ppo.steps_per_env", self.steps_per_env, 1, MAX_ROLLOUT)?;
         anyhow::ensure!(
             self.batch_size() <= MAX_ROLLOUT,
             "ppo.num_envs * ppo.steps_per_env = {} transitions: at most {MAX_ROLLOUT} (about 1.8 KB each)",
             self.batch_size()
         );
+        for (key, value, lo, hi) in [
+            // A training of 0 iterations reports results of an untrained policy.
+            ("iterations", self.iterations, 1, MAX_ITERATIONS),
+            ("epochs", self.epochs, 1, MAX_EPOCHS),
+            ("minibatches", self.minibatches, 1, self.batch_size()),
+            ("cenet_latent_dim", self.cenet_latent_dim, 1, MAX_WIDTH),
+            ("log_every", self.log_every, 1, MAX_ITERATIONS),
+            ("checkpoint_every", self.checkpoint_every, 0, MAX_ITERATIONS),
+        ] {
+            bounds::check_count(&format!("ppo.{key}"), value, lo, hi)?;
+        }
+        check_widths("ppo.cenet_decoder_hidden", &self.cenet_decoder_hidden)?;
+        let rate = Interval::OpenClosed(0.0, 1.0);
+        for (key, value, interval) in [
+            ("gamma", self.gamma, UNIT),
+            ("gae_lambda", self.gae_lambda, UNIT),
+            ("clip_ratio", self.clip_ratio, POSITIVE_UNIT),
+            ("value_loss_coef", self.value_loss_coef, NON_NEGATIVE),
+            ("entropy_coef", self.entropy_coef, NON_NEGATIVE),
+            ("max_grad_norm", self.max_grad_norm, POSITIVE),
+            ("learning_rate", self.learning_rate, rate),
+            ("min_lr", self.min_lr, rate),
+            ("max_lr", self.max_lr, rate),
+            ("desired_kl", self.desired_kl, POSITIVE),
+            ("lr_factor", self.lr_factor, Interval::Above(1.0)),
+            ("init_action_std", self.init_action_std, POSITIVE),
+            ("actor_output_init_scale", self.actor_output_init_scale, POSITIVE),
+            ("obs_clip", self.obs_clip, POSITIVE),
+            ("max_physics_reset_rate", self.max_physics_reset_rate, UNIT),
+            ("cenet_beta", self.cenet_beta, NON_NEGATIVE),
+            ("cenet_loss_coef", self.cenet_loss_coef, NON_NEGATIVE),
+            ("cenet_logvar_clamp", self.cenet_logvar_clamp, POSITIVE),
+        ] {
+            bounds::check(&format!("ppo.{key}"), value, interval)?;
+        }
         anyhow::ensure!(
-            self.iterations <= MAX_ITERATIONS,
-            "ppo.iterations = {}: at most {MAX_ITERATIONS}",
-            self.iterations
-        );
-        anyhow::ensure!(
-            self.cenet_decoder_hidden.iter().all(|&w| w > 0 && w <= MAX_WIDTH),
-            "ppo.cenet_decoder_hidden = {:?}: every width must be in 1..={MAX_WIDTH}",
-            self.cenet_decoder_hidden
-        );
-        anyhow::ensure!(
-            self.cenet_latent_dim <= MAX_WIDTH,
-            "ppo.cenet_latent_dim = {}: at most {MAX_WIDTH}",
-            self.cenet_latent_dim
-        );
-        anyhow::ensure!(
-            self.minibatches <= self.batch_size(),
-            "ppo.minibatches ({}) must not exceed num_envs * steps_per_env ({})",
-            self.minibatches,
-            self.batch_size()
-        );
-        anyhow::ensure!((0.0..=1.0).contains(&self.gamma), "ppo.gamma must be in [0, 1], got {}", self.gamma);
-        anyhow::ensure!(
-            (0.0..=1.0).contains(&self.gae_lambda),
-            "ppo.gae_lambda must be in [0, 1], got {}",
-            self.gae_lambda
-        );
-        anyhow::ensure!(self.clip_ratio > 0.0, "ppo.clip_ratio must be > 0, got {}", self.clip_ratio);
-        anyhow::ensure!(self.init_action_std > 0.0, "ppo.init_action_std must be > 0, got {}", self.init_action_std);
-        anyhow::ensure!(
-            self.actor_output_init_scale.is_finite() && self.actor_output_init_scale > 0.0,
-            "ppo.actor_output_init_scale must be finite and > 0, got {}",
-            self.actor_output_init_scale
-        );
-        anyhow::ensure!(
-            self.min_lr > 0.0 && self.min_lr <= self.learning_rate && self.learning_rate <= self.max_lr,
+            self.min_lr <= self.learning_rate && self.learning_rate <= self.max_lr,
             "ppo learning rates must satisfy 0 < min_lr <= learning_rate <= max_lr, got {} <= {} <= {}",
             self.min_lr,
             self.learning_rate,
             self.max_lr
-        );
-        anyhow::ensure!(self.lr_factor > 1.0, "ppo.lr_factor must be > 1, got {}", self.lr_factor);
-        anyhow::ensure!(self.obs_clip > 0.0, "ppo.obs_clip must be > 0, got {}", self.obs_clip);
-        anyhow::ensure!(
-            (0.0..=1.0).contains(&self.max_physics_reset_rate),
-            "ppo.max_physics_reset_rate must be in [0, 1], got {}",
-            self.max_physics_reset_rate
         );
         Ok(())
     }

@@ -18,6 +18,7 @@
 //! which by its hip joint's name, and `foot_links` names the links whose
 //! frame is the foot point.
 
+use super::bounds::{self, Interval, NON_NEGATIVE, POSITIVE};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -59,14 +60,19 @@ impl RobotConfig {
             "env.robot.legs names {} legs; name all four (FL, FR, RL, RR) or none",
             self.legs.len()
         );
-        for (pattern, &v) in &self.default_pose {
-            anyhow::ensure!(v.is_finite(), "env.robot.default_pose.\"{pattern}\" must be finite, got {v}");
+        for (table, map, interval) in [
+            ("default_pose", &self.default_pose, Interval::Finite),
+            ("kp", &self.kp, POSITIVE),
+            ("kd", &self.kd, NON_NEGATIVE),
+        ] {
+            for (pattern, &v) in map {
+                bounds::check(&format!("env.robot.{table}.\"{pattern}\""), v, interval)?;
+            }
         }
-        for (pattern, &v) in &self.kp {
-            anyhow::ensure!(v.is_finite() && v > 0.0, "env.robot.kp.\"{pattern}\" must be finite and > 0, got {v}");
-        }
-        for (pattern, &v) in &self.kd {
-            anyhow::ensure!(v.is_finite() && v >= 0.0, "env.robot.kd.\"{pattern}\" must be finite and >= 0, got {v}");
+        for (pattern, what) in
+            self.legs.values().map(|p| (p, "legs")).chain(self.foot_links.iter().map(|p| (p, "foot_links")))
+        {
+            anyhow::ensure!(!pattern.is_empty(), "env.robot.{what}: an empty pattern matches no name");
         }
         Ok(())
     }

@@ -135,6 +135,7 @@ impl MaskedLinear {
     ) -> anyhow::Result<Self> {
         cfg.validate()?;
         anyhow::ensure!(in_dim > 0 && out_dim > 0, "{name}: layer shape ({out_dim}, {in_dim}) must be non-empty");
+        cfg.check_selects_in(name, out_dim, in_dim)?;
         let eff_fan_in = (cfg.capacity * in_dim as f64).max(1.0);
         let init_bound = ((if gain_relu { 6.0 } else { 3.0 }) / eff_fan_in).sqrt() as f32;
         let n = out_dim * in_dim;

@@ -99,6 +99,9 @@ impl MaskedMlp {
     /// task in progress never sees its rules change. The layers' initialiser bounds stay.
     pub fn set_mask_config(&mut self, cfg: &MaskConfig) -> anyhow::Result<()> {
         cfg.validate()?;
+        for l in &self.layers {
+            cfg.check_selects_in(&l.name, l.out_dim, l.in_dim)?;
+        }
         if let Some(current) = self.current_task() {
             anyhow::bail!("{}: mask settings changed while task {current} is in progress", self.name);
         }

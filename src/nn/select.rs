@@ -22,10 +22,9 @@ pub struct SelectionParams {
     pub rule: SelectionRule,
 }
 
-/// k = round(c * F): how many elements a row of fan-in `fan_in` selects.
-pub fn row_quota(capacity: f64, fan_in: usize) -> usize {
-    ((capacity * fan_in as f64).round() as usize).min(fan_in)
-}
+/// k = round(c * F): how many elements a row of fan-in `fan_in` selects (defined beside the
+/// capacity it checks, in `config`).
+pub use crate::config::net::row_quota;
 
 /// k_v = round(lambda * k): how many of a row's k come from vacant elements (split rule).
 pub fn vacant_quota(vacant_share: f64, k: usize) -> usize {

@@ -1,0 +1,330 @@
+//! Settings of one task's masks (METHOD.md section 2): how a layer's mask is chosen from the
+//! soft scores (capacity c, vacant share lambda, the rule), the soft scores' noise and entropy
+//! term (sigma), re-initialisation, forward transfer and the mask baselines' settings. Shared by
+//! every masked network (`[net.mask]`); the method's switches change some of them per task.
+
+use super::bounds::{self, Interval, NON_NEGATIVE, POSITIVE, POSITIVE_UNIT, UNIT};
+use super::ppo::MAX_ITERATIONS;
+use serde::{Deserialize, Serialize};
+
+/// How a layer's mask is chosen from the soft scores (METHOD.md 2.1 and its ablation variants).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SelectionRule {
+    /// Per row: round(lambda*k) from vacant elements, the rest from occupied ones, filled from the other group when one runs short.
+    #[default]
+    Split,
+    /// Per row: one top-k over vacant and occupied together (WSN-like).
+    Free,
+    /// Per row: top-k over vacant elements only (fewer if there are not enough).
+    Vacant,
+    /// One top-k over the whole layer (WSN's original rule).
+    PerLayer,
+    /// PackNet (set by the method `packnet`): every vacant and occupied element, the vacant
+    /// ones pruned by magnitude to `packnet_keep` at `packnet_prune_at` or the task's end.
+    #[serde(rename = "packnet")]
+    PackNet,
+    /// Piggyback (set by the method `piggyback`): the occupied elements whose real-valued
+    /// score exceeds `piggyback_threshold`; no weight trains.
+    Piggyback,
+}
+
+impl SelectionRule {
+    /// Whether the rule belongs to a mask baseline, set by its method rather than a run's [net.mask].
+    pub fn is_baseline(&self) -> bool {
+        matches!(self, Self::PackNet | Self::Piggyback)
+    }
+}
+
+/// Where a new task's per-task bias starts (METHOD.md 2.6; the paper does not say).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum BiasStart {
+    /// The mean of the related tasks' biases (zero without any, e.g. in `scratch` mode).
+    #[default]
+    Related,
+    /// Zero for every task, whatever its related tasks: every transfer mode starts alike.
+    Zero,
+}
+
+/// What the soft-score sigma is measured in (METHOD.md 2.3; the scale is ours, the paper gives none).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SigmaScale {
+    /// Score units: S = mu + sigma * eps. With the score means spread 0.3 a sigma of 0.005-0.05
+    /// moves almost no element across the top-k cut (the runs before issue 13 used this).
+    Absolute,
+    /// Units of the score spread at each row's top-k cut: S = mu + sigma * g_row * eps, where
+    /// g_row is half the distance between the scores ranked k - w and k + w + 1 among the row's
+    /// selectable elements (w = max(1, round(k / 10)); the whole layer for `per-layer`), taken
+    /// from mu at every iteration. Where the row's selection is one top-k over its selectable
+    /// elements (a first task, `free`, `per-layer`), a score at the cut moves about w ranks per
+    /// standard deviation at sigma 1, whatever the scores' spread, so the entropy term changes the
+    /// selection. Under `split` the rule cuts the vacant and the occupied groups apart, at their
+    /// own quotas, where ranks lie sparser than in the pooled row: at c 0.2, lambda 0.25 with the
+    /// base occupying 0.2 of a row and alike spread scores, a score at a group's cut moves about
+    /// w/3 (vacant) to w/4 (occupied) ranks per sigma. (A gap per group is the refinement; the
+    /// shipped paper-regime runs used this one.)
+    #[default]
+    ScoreGap,
+}
+
+/// Which distribution the plasticity entropy term of the first E iterations acts on (METHOD.md
+/// 2.3 says the soft scores; the paper's Figure 8 caption says "of the action").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EntropyTarget {
+    /// -beta_H * H(soft scores), H = sum 0.5 ln(2 pi e sigma^2): widens sigma, so the sampled
+    /// masks explore which weights to use.
+    #[default]
+    SoftScores,
+    /// -beta_H * H(action distribution), added to PPO's own entropy bonus for the first E
+    /// iterations of each new task (the toy learner has no action distribution: no term).
+    /// H(action) has one term per action dimension, not one per weight: beta_H needs to be
+    /// about 1e-2 here where 1e-4 acts on the soft scores.
+    Action,
+}
+
+/// The masked-layer settings of the method (METHOD.md 2.1 to 2.6).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MaskConfig {
+    /// Capacity ratio c: the fraction of each row (or layer, for `per-layer`) a task selects, in
+    /// (0, 1]; round(c * fan-in) must be at least 1 in every layer.
+    pub capacity: f64,
+    /// Vacant share lambda: the fraction of a row's selection taken from vacant elements.
+    pub vacant_share: f64,
+    /// Private share p: the fraction of the layer's elements made private to a task at its end.
+    pub private_share: f64,
+    /// Selection rule: "split" (the method), "free", "vacant" or "per-layer".
+    pub rule: SelectionRule,
+    /// Standard deviation of the initial soft-score means (Gaussian around 0). Adam moves every
+    /// mean by about the learning rate per step, so the spread sets how fast the means' drift
+    /// changes the hard mask; in score units (`sigma_scale = "absolute"`) it also sets what the
+    /// noise does: there, at 0.01 a PPO run redrew 37 % of its selected weights every iteration
+    /// (`charts/mask_churn_actor`), at 0.3 about 2-3 %. Under `score_gap` the noise scales with
+    /// the spread and only the drift depends on it.
+    pub score_init_std: f64,
+    /// What sigma, sigma_init, sigma_floor and sigma_max are measured in: `score_gap` (the
+    /// scores' spread at each row's top-k cut) or `absolute` (score units). Set the three sigma
+    /// values with it: the defaults (0.5, 1e-3, 4) are in score-gap units, and in score units a
+    /// sigma of 0.5 against means spread 0.3 draws nearly random masks.
+    pub sigma_scale: SigmaScale,
+    /// Initial soft-score sigma (one per layer) at the start of every task, in `sigma_scale`
+    /// units (the layer trains ln sigma, so sigma stays > 0 whatever the optimiser does).
+    pub sigma_init: f64,
+    /// Adam's learning rate for ln sigma, fixed (the paper: Adam 1e-3 for the soft networks);
+    /// 0: the PPO optimiser's rate, which the KL adaptation drives (about 2e-4 in the base run).
+    /// Adam moves ln sigma by about its rate per step whatever beta_H is, so this rate and E
+    /// decide how far the entropy term widens sigma.
+    pub sigma_learning_rate: f64,
+    /// Whether the entropy term -beta_H * H is used (METHOD.md 2.3).
+    pub entropy: bool,
+    /// What the entropy term acts on: `soft_scores` (METHOD.md 2.3) or `action` (Figure 8's caption).
+    pub entropy_target: EntropyTarget,
+    /// beta_H, the weight of the entropy term.
+    pub entropy_weight: f64,
+    /// E: the number of iterations of each task during which the entropy term is on.
+    pub entropy_iterations: usize,
+    /// Multiplicative decay of sigma per iteration after E iterations (ln(decay) added to ln sigma).
+    pub sigma_decay: f64,
+    /// Lower bound of sigma (sigma units; applied to ln sigma as ln of it).
+    pub sigma_floor: f64,
+    /// Upper bound of sigma (sigma units; applied to ln sigma as ln of it): Adam moves the one
+    /// ln sigma per layer by about the learning rate per step whatever beta_H is, so sigma grows
+    /// by a factor of about exp(lr) per step and without a bound the entropy term would drown the
+    /// scores' ranking.
+    pub sigma_max: f64,
+    /// Re-initialise vacant weights and redraw soft-score means at the end of each task (METHOD.md 2.4).
+    pub reinit: bool,
+    /// The range of re-initialised vacant weights as a fraction of the initialiser's (1 = METHOD.md
+    /// 2.4 as written). Below 1, a later task that selects all of a related task's elements plus
+    /// fresh vacant ones starts close to the related task's function: at 1 the fresh elements
+    /// (a quarter of a row's selection at lambda 0.25) add noise of about a third of the layer's
+    /// output variance, and the new task's first policy does not walk. Acts at the end of a task.
+    pub reinit_scale: f64,
+    /// Forward-transfer bonus on related tasks' elements, in units of `score_init_std` (METHOD.md 2.6).
+    pub transfer_bonus: f64,
+    /// PackNet: the share of a task's fresh (vacant) weights kept, by magnitude, when it is pruned;
+    /// the others are zeroed and stay vacant for later tasks.
+    pub packnet_keep: f64,
+    /// PackNet: the task's iteration from which its fresh weights are pruned (the rest of the task
+    /// retrains the kept ones); none prunes at the task's end.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub packnet_prune_at: Option<usize>,
+    /// Piggyback: a mask element is on where its real-valued score exceeds this.
+    pub piggyback_threshold: f64,
+    /// Piggyback: every score's value when a task starts.
+    pub piggyback_init: f64,
+    /// Whether the soft scores of occupied elements train too (one reading of METHOD.md 2.2's
+    /// straight-through gradient); off: only vacant elements' scores move, occupied ones keep
+    /// the ranking the task started with (its transfer bonus included).
+    pub score_grad_occupied: bool,
+    /// Where a new task's bias starts: `related` (the related tasks' mean) or `zero`.
+    pub bias_start: BiasStart,
+}
+
+impl Default for MaskConfig {
+    fn default() -> Self {
+        Self {
+            capacity: 0.2,
+            vacant_share: 0.25,
+            private_share: 0.02,
+            rule: SelectionRule::Split,
+            score_init_std: 0.3,
+            sigma_scale: SigmaScale::ScoreGap,
+            sigma_init: 0.5,
+            sigma_learning_rate: 1e-3,
+            entropy: true,
+            entropy_target: EntropyTarget::SoftScores,
+            entropy_weight: 1e-4,
+            entropy_iterations: 100,
+            sigma_decay: 0.99,
+            sigma_floor: 1e-3,
+            sigma_max: 4.0,
+            reinit: true,
+            reinit_scale: 1.0,
+            transfer_bonus: 3.0,
+            packnet_keep: 0.5,
+            packnet_prune_at: None,
+            piggyback_threshold: 5e-3,
+            piggyback_init: 1e-2,
+            score_grad_occupied: true,
+            bias_start: BiasStart::Related,
+        }
+    }
+}
+
+impl MaskConfig {
+    /// These settings with `other`'s end-of-task ones (`private_share`, `reinit`,
+    /// `reinit_scale`): the ones that act only when a task ends (METHOD.md 2.4), so
+    /// they may change while a task is in progress.
+    pub fn with_end_of_task(&self, other: &MaskConfig) -> MaskConfig {
+        MaskConfig {
+            private_share: other.private_share,
+            reinit: other.reinit,
+            reinit_scale: other.reinit_scale,
+            ..self.clone()
+        }
+    }
+
+    /// Fills in what a saved mask configuration from before issue 13 left out: such a file ran
+    /// with sigma in score units and ln sigma at the PPO optimiser's rate, so a `mask` object
+    /// without `sigma_scale` gets `"absolute"` (and `sigma_learning_rate` 0 when missing) instead
+    /// of today's defaults. For checkpoints and manifests, which record a run; a run file a user
+    /// writes takes the defaults. Anything but a JSON object is left as it is.
+    pub fn fill_in_pre_issue_13(mask: &mut serde_json::Value) {
+        if let Some(m) = mask.as_object_mut() {
+            if !m.contains_key("sigma_scale") {
+                m.insert("sigma_scale".into(), "absolute".into());
+                m.entry("sigma_learning_rate").or_insert(0.0.into());
+            }
+        }
+    }
+
+    /// Checks the ranges of every field and the relations between them; the error names the
+    /// key and the expected range.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        let key = |name: &str| format!("net.mask.{name}");
+        for (name, v, interval) in [
+            // A capacity of 0 selects nothing: every task would train biases only.
+            ("capacity", self.capacity, POSITIVE_UNIT),
+            ("vacant_share", self.vacant_share, UNIT),
+            ("private_share", self.private_share, UNIT),
+            ("score_init_std", self.score_init_std, POSITIVE),
+            // ln sigma is what trains: sigma 0 would start it at minus infinity.
+            ("sigma_init", self.sigma_init, POSITIVE),
+            ("sigma_floor", self.sigma_floor, POSITIVE),
+            ("sigma_max", self.sigma_max, POSITIVE),
+            ("sigma_learning_rate", self.sigma_learning_rate, UNIT),
+            ("entropy_weight", self.entropy_weight, NON_NEGATIVE),
+            // ln(decay) is added to ln sigma: 0 would send sigma to the floor in one step.
+            ("sigma_decay", self.sigma_decay, POSITIVE_UNIT),
+            ("reinit_scale", self.reinit_scale, UNIT),
+            ("transfer_bonus", self.transfer_bonus, Interval::Finite),
+            // Keeping none of a task's fresh weights would leave it nothing of its own.
+            ("packnet_keep", self.packnet_keep, POSITIVE_UNIT),
+            ("piggyback_threshold", self.piggyback_threshold, Interval::Finite),
+            ("piggyback_init", self.piggyback_init, Interval::Finite),
+        ] {
+            bounds::check(&key(name), v, interval)?;
+        }
+        anyhow::ensure!(
+            self.sigma_floor <= self.sigma_max,
+            "net.mask.sigma_max ({}) must be >= sigma_floor ({})",
+            self.sigma_max,
+            self.sigma_floor
+        );
+        anyhow::ensure!(
+            self.piggyback_init > self.piggyback_threshold,
+            "net.mask.piggyback_init = {} must exceed piggyback_threshold = {}: every mask element would start \
+             off, a mask that selects nothing",
+            self.piggyback_init,
+            self.piggyback_threshold
+        );
+        bounds::check_count("net.mask.entropy_iterations", self.entropy_iterations, 0, MAX_ITERATIONS)?;
+        if let Some(at) = self.packnet_prune_at {
+            bounds::check_count("net.mask.packnet_prune_at", at, 0, MAX_ITERATIONS)?;
+        }
+        Ok(())
+    }
+
+    /// Checks that a task selects at least one element of `layer` (`rows x cols`, out x in)
+    /// under these settings: k = round(c * F) with F the row's fan-in (the layer's size under
+    /// `per-layer`). The mask baselines choose by their own rules and always pass.
+    pub fn check_selects_in(&self, layer: &str, rows: usize, cols: usize) -> anyhow::Result<()> {
+        let (n, of) = match self.rule {
+            SelectionRule::PackNet | SelectionRule::Piggyback => return Ok(()),
+            SelectionRule::PerLayer => (rows * cols, "elements"),
+            _ => (cols, "inputs per row"),
+        };
+        anyhow::ensure!(
+            row_quota(self.capacity, n) > 0,
+            "net.mask.capacity = {}: selects nothing in {layer} ({n} {of}: round({} * {n}) = 0); it needs a capacity of at least {}",
+            self.capacity,
+            self.capacity,
+            0.5 / n.max(1) as f64
+        );
+        Ok(())
+    }
+}
+
+/// k = round(c * F): how many elements a row of fan-in `fan_in` selects at capacity c (and a
+/// layer of `fan_in` elements under `per-layer`).
+pub fn row_quota(capacity: f64, fan_in: usize) -> usize {
+    ((capacity * fan_in as f64).round() as usize).min(fan_in)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_saved_mask_without_a_sigma_scale_is_read_as_it_ran_in_score_units() {
+        let mut old = serde_json::json!({ "capacity": 0.2, "sigma_init": 0.005, "sigma_max": 0.05 });
+        MaskConfig::fill_in_pre_issue_13(&mut old);
+        let m: MaskConfig = serde_json::from_value(old).unwrap();
+        assert_eq!((m.sigma_scale, m.sigma_learning_rate, m.sigma_init), (SigmaScale::Absolute, 0.0, 0.005));
+        // A mask that names its scale keeps everything it says.
+        let mut new = serde_json::json!({ "sigma_scale": "score_gap", "sigma_learning_rate": 0.002 });
+        MaskConfig::fill_in_pre_issue_13(&mut new);
+        let m: MaskConfig = serde_json::from_value(new).unwrap();
+        assert_eq!((m.sigma_scale, m.sigma_learning_rate), (SigmaScale::ScoreGap, 0.002));
+    }
+
+    #[test]
+    fn non_finite_mask_settings_are_errors_naming_the_key() {
+        assert!(MaskConfig::default().validate().is_ok());
+        for (key, cfg) in [
+            ("entropy_weight", MaskConfig { entropy_weight: f64::NAN, ..MaskConfig::default() }),
+            ("transfer_bonus", MaskConfig { transfer_bonus: f64::INFINITY, ..MaskConfig::default() }),
+            ("score_init_std", MaskConfig { score_init_std: f64::INFINITY, ..MaskConfig::default() }),
+            ("reinit_scale", MaskConfig { reinit_scale: 1.5, ..MaskConfig::default() }),
+            ("sigma_learning_rate", MaskConfig { sigma_learning_rate: -1e-3, ..MaskConfig::default() }),
+            ("sigma_learning_rate", MaskConfig { sigma_learning_rate: f64::NAN, ..MaskConfig::default() }),
+        ] {
+            let err = cfg.validate().unwrap_err().to_string();
+            assert!(err.contains(key), "{key}: {err}");
+        }
+    }
+}
