@@ -13,6 +13,8 @@
 
 use super::method::ContinualMethod;
 use super::replay::ReplayBuffers;
+use crate::config::bounds::{self, NON_NEGATIVE};
+use crate::config::ppo::MAX_ROLLOUT;
 use crate::nn::{NetworkKind, Param, TaskId};
 use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
 use candle_core::Tensor;
@@ -40,13 +42,10 @@ impl Default for ErConfig {
 impl ErConfig {
     /// Errors name `table` and the key.
     pub fn validate(&self, table: &str) -> anyhow::Result<()> {
-        anyhow::ensure!(
-            self.beta.is_finite() && self.beta >= 0.0,
-            "[method.{table}] beta = {}: expected a finite value >= 0",
-            self.beta
-        );
+        bounds::check(&format!("[method.{table}] beta"), self.beta, NON_NEGATIVE)?;
+        // A task's buffer holds at most one rollout's rows: MAX_ROLLOUT bounds both.
         for (key, v) in [("buffer_size", self.buffer_size), ("batch_size", self.batch_size)] {
-            anyhow::ensure!((1..=1 << 20).contains(&v), "[method.{table}] {key} = {v}: expected 1 to 1048576");
+            bounds::check_count(&format!("[method.{table}] {key}"), v, 1, MAX_ROLLOUT)?;
         }
         Ok(())
     }

@@ -19,6 +19,8 @@
 
 use super::method::ContinualMethod;
 use super::quadratic_penalty::{is_regularised, QuadraticPenalty};
+use crate::config::bounds::{self, NON_NEGATIVE};
+use crate::config::ppo::MAX_ROLLOUT;
 use crate::nn::{NetworkKind, Param, TaskId};
 use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
 use candle_core::Tensor;
@@ -44,17 +46,8 @@ impl Default for EwcConfig {
 impl EwcConfig {
     /// Errors name the key.
     pub fn validate(&self) -> anyhow::Result<()> {
-        anyhow::ensure!(
-            self.lambda.is_finite() && self.lambda >= 0.0,
-            "[method.ewc] lambda = {}: expected a finite value >= 0",
-            self.lambda
-        );
-        anyhow::ensure!(
-            (1..=1 << 20).contains(&self.fisher_samples),
-            "[method.ewc] fisher_samples = {}: expected 1 to 1048576",
-            self.fisher_samples
-        );
-        Ok(())
+        bounds::check("[method.ewc] lambda", self.lambda, NON_NEGATIVE)?;
+        bounds::check_count("[method.ewc] fisher_samples", self.fisher_samples, 1, MAX_ROLLOUT)
     }
 }
 

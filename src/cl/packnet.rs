@@ -14,7 +14,9 @@
 
 use super::method::ContinualMethod;
 use super::ours::Switches;
+use crate::config::bounds::{self, POSITIVE_UNIT};
 use crate::config::net::{MaskConfig, SelectionRule};
+use crate::config::ppo::MAX_ITERATIONS;
 use serde::{Deserialize, Serialize};
 
 /// `[method.packnet]`.
@@ -36,12 +38,8 @@ impl Default for PackNetConfig {
 impl PackNetConfig {
     /// Errors name the key.
     pub fn validate(&self) -> anyhow::Result<()> {
-        anyhow::ensure!(
-            self.keep > 0.0 && self.keep <= 1.0,
-            "[method.packnet] keep = {}: expected a share in (0, 1]",
-            self.keep
-        );
-        Ok(())
+        bounds::check("[method.packnet] keep", self.keep, POSITIVE_UNIT)?;
+        bounds::check_count("[method.packnet] retrain_iterations", self.retrain_iterations, 0, MAX_ITERATIONS)
     }
 
     /// The iteration of a task of `iterations` from which it is pruned.

@@ -12,6 +12,7 @@
 use super::method::ContinualMethod;
 use super::ours::Switches;
 use super::packnet::without_plasticity_mechanisms;
+use crate::config::bounds::{self, Interval};
 use crate::config::net::{MaskConfig, SelectionRule};
 use serde::{Deserialize, Serialize};
 
@@ -34,11 +35,14 @@ impl Default for PiggybackConfig {
 impl PiggybackConfig {
     /// Errors name the key.
     pub fn validate(&self) -> anyhow::Result<()> {
+        bounds::check("[method.piggyback] threshold", self.threshold, Interval::Finite)?;
+        bounds::check("[method.piggyback] init", self.init, Interval::Finite)?;
         anyhow::ensure!(
-            self.threshold.is_finite() && self.init.is_finite(),
-            "[method.piggyback] threshold = {}, init = {}: expected finite values",
-            self.threshold,
-            self.init
+            self.init > self.threshold,
+            "[method.piggyback] init = {} must exceed threshold = {}: every mask element would start off, \
+             a mask that selects nothing",
+            self.init,
+            self.threshold
         );
         Ok(())
     }

@@ -21,6 +21,8 @@
 
 use super::method::ContinualMethod;
 use super::quadratic_penalty::{is_regularised, QuadraticPenalty};
+use crate::config::bounds::{self, NON_NEGATIVE, POSITIVE, POSITIVE_UNIT};
+use crate::config::ppo::MAX_ITERATIONS;
 use crate::nn::checkpoint::{integer_tensor, tensor_integer};
 use crate::nn::{NetworkKind, Param, TaskId};
 use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
@@ -52,24 +54,10 @@ impl Default for RwalkConfig {
 impl RwalkConfig {
     /// Errors name the key.
     pub fn validate(&self) -> anyhow::Result<()> {
-        let ok = |v: f64| v.is_finite() && v >= 0.0;
-        anyhow::ensure!(ok(self.lambda), "[method.rwalk] lambda = {}: expected a finite value >= 0", self.lambda);
-        anyhow::ensure!(
-            self.alpha.is_finite() && self.alpha > 0.0 && self.alpha <= 1.0,
-            "[method.rwalk] alpha = {}: expected a value in (0, 1]",
-            self.alpha
-        );
-        anyhow::ensure!(
-            (1..=1_000_000).contains(&self.fisher_every),
-            "[method.rwalk] fisher_every = {}: expected 1 to 1000000",
-            self.fisher_every
-        );
-        anyhow::ensure!(
-            ok(self.eps) && self.eps > 0.0,
-            "[method.rwalk] eps = {}: expected a finite value > 0",
-            self.eps
-        );
-        Ok(())
+        bounds::check("[method.rwalk] lambda", self.lambda, NON_NEGATIVE)?;
+        bounds::check("[method.rwalk] alpha", self.alpha, POSITIVE_UNIT)?;
+        bounds::check_count("[method.rwalk] fisher_every", self.fisher_every, 1, MAX_ITERATIONS)?;
+        bounds::check("[method.rwalk] eps", self.eps, POSITIVE)
     }
 }
 

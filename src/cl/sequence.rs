@@ -18,6 +18,8 @@
 //! its private parameters only (METHOD.md 2.5).
 
 use super::ours::SwitchOverrides;
+use crate::config::bounds;
+use crate::config::ppo::MAX_ITERATIONS;
 use crate::sim::Perturbation;
 use serde::{Deserialize, Serialize};
 use std::str::FromStr;
@@ -92,12 +94,16 @@ impl Sequence {
     /// must be trained earlier in the sequence or be one of `known`'s tasks.
     pub fn validate_with(&self, known: KnownBefore) -> anyhow::Result<()> {
         anyhow::ensure!(!self.tasks.is_empty(), "the sequence has no [[task]] entries");
+        bounds::check_count("iterations", self.iterations, 0, MAX_ITERATIONS)?;
         for (i, task) in self.tasks.iter().enumerate() {
             let at = || format!("task {} ({})", i + 1, task.name);
             Perturbation::from_str(&task.name).map_err(|e| anyhow::anyhow!("{}: {e}", at()))?;
-            if task.iterations == Some(0) {
-                anyhow::bail!("{}: iterations must be at least 1", at());
-            }
+            // A task of 0 iterations trains nothing and reports results as if it had.
+            let (key, n) = match task.iterations {
+                Some(n) => ("iterations", n),
+                None => ("iterations (the run's default, which it takes)", self.iterations),
+            };
+            bounds::check_count(key, n, 1, MAX_ITERATIONS).map_err(|e| anyhow::anyhow!("{}: {e}", at()))?;
             if task.init == TransferInit::Random && task.related.is_empty() {
                 anyhow::bail!("{}: init = \"random\" draws as many tasks as `related` names, and it names none", at());
             }
@@ -118,6 +124,11 @@ impl Sequence {
                 );
             }
         }
+        let total: usize = (0..self.tasks.len()).map(|i| self.iterations_of(i)).sum();
+        anyhow::ensure!(
+            total <= MAX_ITERATIONS,
+            "the sequence trains {total} iterations in all: at most {MAX_ITERATIONS} (the curves keep a row per iteration)"
+        );
         Ok(())
     }
 

@@ -16,6 +16,7 @@
 
 use super::method::ContinualMethod;
 use super::quadratic_penalty::{is_regularised, QuadraticPenalty};
+use crate::config::bounds::{self, NON_NEGATIVE, POSITIVE};
 use crate::nn::{NetworkKind, Param, TaskId};
 use crate::rl::{Metrics, OutputSample, PolicyProbe, UpdateHooks};
 use candle_core::backprop::GradStore;
@@ -42,17 +43,8 @@ impl Default for SiConfig {
 impl SiConfig {
     /// Errors name the key.
     pub fn validate(&self) -> anyhow::Result<()> {
-        anyhow::ensure!(
-            self.c.is_finite() && self.c >= 0.0,
-            "[method.si] c = {}: expected a finite value >= 0",
-            self.c
-        );
-        anyhow::ensure!(
-            self.xi.is_finite() && self.xi > 0.0,
-            "[method.si] xi = {}: expected a finite value > 0",
-            self.xi
-        );
-        Ok(())
+        bounds::check("[method.si] c", self.c, NON_NEGATIVE)?;
+        bounds::check("[method.si] xi", self.xi, POSITIVE)
     }
 }
 

@@ -22,7 +22,8 @@
 //! Every key is optional except the tasks; an unknown key is an error naming
 //! the file and the key.
 
-use crate::cl::{KnownBefore, MethodSettings, Sequence, SwitchOverrides, Switches};
+use crate::cl::{ContinualMethod, KnownBefore, MethodSettings, Sequence, SwitchOverrides, Switches};
+use crate::config::net::{MaskConfig, NetworkKind};
 use crate::config::Config;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
@@ -151,7 +152,8 @@ impl RunConfig {
             }
             Some(other) => anyhow::bail!("method = {other}: expected a [method] table"),
         };
-        let kind = crate::cl::method_by_name(&method, &method_settings)?.network_kind();
+        let method_impl = crate::cl::method_by_name(&method, &method_settings)?;
+        let kind = method_impl.network_kind();
         if config.net.kind != kind {
             anyhow::ensure!(
                 config.net.kind.is_masked(),
@@ -160,7 +162,14 @@ impl RunConfig {
             );
         }
         let switches = Switches::from_mask_config(&config.net.mask).with(&overrides);
-        switches.apply(&config.net.mask).context("in [method]")?;
+        let base_mask = switches.apply(&config.net.mask).context("in [method]")?;
+        config.net.check_selects(&base_mask).context("in [method]")?;
+        if kind == NetworkKind::Masked {
+            check_task_masks(&config, &*method_impl, &base_mask, &switches, &sequence)?;
+        }
+        if method == "packnet" {
+            check_packnet_budgets(&method_settings, &sequence)?;
+        }
         let eval: EvalConfig = match eval_value {
             Some(v) => v.try_into().map_err(|e| anyhow::anyhow!("in [eval]: {e}"))?,
             None => EvalConfig::default(),
@@ -200,6 +209,44 @@ impl RunConfig {
         self.method = name.to_string();
         Ok(self)
     }
+}
+
+/// Each task's mask settings as the method will make them when the task starts (the run's
+/// switches with the task's `[task.switches]`), checked now: ranges, and that the capacity
+/// selects something in every layer `[net]` sizes.
+fn check_task_masks(
+    config: &Config,
+    method: &dyn ContinualMethod,
+    base_mask: &MaskConfig,
+    switches: &Switches,
+    sequence: &Sequence,
+) -> anyhow::Result<()> {
+    for (i, task) in sequence.tasks.iter().enumerate() {
+        let task_switches = switches.with(&task.switches);
+        let mask = task_switches
+            .apply(base_mask)
+            .and_then(|_| method.task_mask_config(base_mask, &task_switches, sequence.iterations_of(i)))
+            .and_then(|mask| config.net.check_selects(&mask));
+        mask.with_context(|| format!("task {} ({}): in [task.switches]", i + 1, task.name))?;
+    }
+    Ok(())
+}
+
+/// PackNet prunes a task `retrain_iterations` before its end: a task no longer than that would
+/// be pruned before it trained its fresh weights at all.
+fn check_packnet_budgets(settings: &MethodSettings, sequence: &Sequence) -> anyhow::Result<()> {
+    let retrain = settings.packnet.retrain_iterations;
+    for (i, task) in sequence.tasks.iter().enumerate() {
+        let n = sequence.iterations_of(i);
+        anyhow::ensure!(
+            retrain < n,
+            "[method.packnet] retrain_iterations = {retrain}: task {} ({}) trains {n} iterations, so it would \
+             be pruned before its first (give it more than {retrain}, or retrain_iterations = 0 for a tenth)",
+            i + 1,
+            task.name
+        );
+    }
+    Ok(())
 }
 
 #[cfg(test)]

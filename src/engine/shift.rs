@@ -14,6 +14,8 @@
 //! [`TrainEnv`]: the motors get the action chosen `latency_steps` control
 //! steps earlier (zeros at the start of an episode).
 
+use crate::config::bounds::{self, Interval, NON_NEGATIVE, POSITIVE};
+use crate::config::ppo::MAX_ITERATIONS;
 use crate::config::EnvConfig;
 use crate::rl::{EnvDims, TrainEnv, VecStep};
 use anyhow::Context;
@@ -58,31 +60,19 @@ impl Shift {
         Ok(shift)
     }
 
-    /// Checks the ranges.
+    /// Checks the ranges (with the same bounds as `[env]`'s ranges) and the budget.
     pub fn validate(&self) -> anyhow::Result<()> {
-        for (key, range) in
-            [("friction", self.friction), ("added_mass", self.added_mass), ("motor_strength", self.motor_strength)]
-        {
-            if let Some([lo, hi]) = range {
-                anyhow::ensure!(
-                    lo.is_finite() && hi.is_finite() && lo <= hi,
-                    "{key} = [{lo}, {hi}]: expected [low, high] with low <= high"
-                );
+        for (key, range, interval) in [
+            ("friction", self.friction, NON_NEGATIVE),
+            ("added_mass", self.added_mass, Interval::Finite),
+            ("motor_strength", self.motor_strength, POSITIVE),
+        ] {
+            if let Some(range) = range {
+                bounds::check_range(key, range, interval)?;
             }
         }
-        if let Some([lo, _]) = self.friction {
-            anyhow::ensure!(lo >= 0.0, "friction must be >= 0");
-        }
-        if let Some([lo, _]) = self.motor_strength {
-            anyhow::ensure!(lo > 0.0, "motor_strength must be > 0");
-        }
-        anyhow::ensure!(
-            self.latency_s >= 0.0 && self.latency_s <= MAX_LATENCY_S,
-            "latency_s = {}: expected a value in [0, {MAX_LATENCY_S}] seconds",
-            self.latency_s
-        );
-        anyhow::ensure!(self.iterations > 0, "iterations must be at least 1");
-        Ok(())
+        bounds::check("latency_s", self.latency_s, Interval::Closed(0.0, MAX_LATENCY_S.into()))?;
+        bounds::check_count("iterations", self.iterations, 1, MAX_ITERATIONS)
     }
 
     /// `env` with the shift's ranges (randomisation switched on when a range is given).
