@@ -1,13 +1,17 @@
 //! `quadcl bench`: throughput figures, as JSON or a readable table.
 
 use clap::Args;
+use quadcl::config::bounds::{self, Interval};
+
+/// The longest `--seconds`: the measurements keep a time per step they take.
+pub const MAX_BENCH_SECONDS: f64 = 600.0;
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Seconds to spend on each measurement.
+    /// Seconds to spend on each measurement (at most 600).
     #[arg(long, default_value_t = 2.0)]
     pub seconds: f64,
     /// Only these sections (comma-separated: env, nn, ppo, record, tui); all by default.
@@ -16,11 +20,7 @@ pub struct BenchArgs {
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.seconds.is_finite() && args.seconds > 0.0,
-        "--seconds must be a finite number > 0, got {}",
-        args.seconds
-    );
+    bounds::check("--seconds", args.seconds, Interval::OpenClosed(0.0, MAX_BENCH_SECONDS))?;
     const SECTIONS: [&str; 5] = ["env", "nn", "ppo", "record", "tui"];
     if let Some(bad) = args.only.iter().find(|s| !SECTIONS.contains(&s.as_str())) {
         anyhow::bail!("--only: unknown section {bad:?} (sections: {})", SECTIONS.join(", "));

@@ -4,6 +4,8 @@
 //! checks that no other task changed.
 
 use clap::Args;
+use quadcl::config::bounds;
+use quadcl::config::ppo::{check_env_count, MAX_ITERATIONS};
 use quadcl::engine::Shift;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -36,8 +38,10 @@ pub struct FinetuneArgs {
 pub fn run(args: FinetuneArgs) -> anyhow::Result<()> {
     let mut shift = Shift::load(&args.shift)?;
     if let Some(n) = args.iterations {
+        bounds::check_count("--iterations", n, 1, MAX_ITERATIONS)?;
         shift.iterations = n;
     }
+    check_env_count("--episodes", args.episodes)?;
     let r = quadcl::engine::sim2real(
         &args.policy,
         &args.task,

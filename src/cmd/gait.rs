@@ -4,6 +4,8 @@
 //! second, which feet move together and the gait they name (`rl::gait`).
 
 use clap::Args;
+use quadcl::config::bounds::{self, Interval};
+use quadcl::config::env::check_command;
 use quadcl::rl::{record_gait, GaitReport, HeldCommand};
 use quadcl::sim::{Perturbation, RobotModel};
 use std::path::PathBuf;
@@ -16,13 +18,13 @@ pub struct GaitArgs {
     /// Task to run on: `none`, `crash:FL`, ...
     #[arg(long, default_value = "none")]
     pub task: String,
-    /// Forward velocity command, m/s.
+    /// Forward velocity command, m/s (in [-10, 10]).
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     pub vx: f32,
-    /// Yaw rate command, rad/s.
+    /// Yaw rate command, rad/s (in [-10, 10]).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub wz: f32,
-    /// Seconds recorded, after 2 s to settle into the gait.
+    /// Seconds recorded, after 2 s to settle into the gait (at most 3600: one contact row a step is kept).
     #[arg(long, default_value_t = 10.0)]
     pub seconds: f32,
     /// Seed of the environment's reset.
@@ -34,7 +36,10 @@ pub struct GaitArgs {
 }
 
 pub fn run(args: GaitArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(args.seconds > 0.0 && args.seconds.is_finite(), "--seconds must be > 0, got {}", args.seconds);
+    let seconds = Interval::OpenClosed(0.0, quadcl::record::MAX_SECONDS);
+    bounds::check("--seconds", args.seconds, seconds)?;
+    check_command("--vx", args.vx)?;
+    check_command("--wz", args.wz)?;
     let task: Perturbation = args.task.parse()?;
     let loaded = quadcl::rl::load_for_task(&args.policy, &task.to_string())?;
     let env_cfg = &loaded.info.config.env;

@@ -16,19 +16,19 @@ pub struct EpisodeArgs {
     /// Task to run on: `none`, `crash:FL`, ...
     #[arg(long, default_value = "none")]
     pub task: String,
-    /// Simulated seconds at most.
+    /// Simulated seconds at most (in (0, 3600]).
     #[arg(long, default_value_t = 10.0)]
     pub seconds: f64,
     /// Stop after this many finished episodes (falls or time-outs).
     #[arg(long)]
     pub episodes: Option<u64>,
-    /// Hold this forward velocity command, m/s (with --vy and --wz; without any, the env's random commands).
+    /// Hold this forward velocity command, m/s, in [-10, 10] (with --vy and --wz; without any, the env's random commands).
     #[arg(long, allow_hyphen_values = true)]
     pub vx: Option<f32>,
-    /// Held lateral velocity command, m/s.
+    /// Held lateral velocity command, m/s, in [-10, 10].
     #[arg(long, allow_hyphen_values = true)]
     pub vy: Option<f32>,
-    /// Held yaw rate command, rad/s.
+    /// Held yaw rate command, rad/s, in [-10, 10].
     #[arg(long, allow_hyphen_values = true)]
     pub wz: Option<f32>,
     /// Seed of the environment's reset.

@@ -10,6 +10,7 @@
 
 use anyhow::Context;
 use clap::Args;
+use quadcl::config::bounds::{self, Interval};
 use quadcl::config::EnvConfig;
 use quadcl::sim::{stand_test, Leg, RobotModel, StandReport};
 use serde::Serialize;
@@ -22,7 +23,7 @@ pub struct RobotArgs {
     /// A run file or training config whose `[env]` describes the robot (default pose, gains, heights).
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Seconds to settle the robot at its default pose.
+    /// Seconds to settle the robot at its default pose (in (0, 60]).
     #[arg(long, default_value_t = 2.0)]
     pub seconds: f32,
     /// Print one JSON object instead of text.
@@ -69,7 +70,7 @@ struct Report {
 }
 
 pub fn run(args: RobotArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(args.seconds > 0.0 && args.seconds <= 60.0, "--seconds must be in (0, 60], got {}", args.seconds);
+    bounds::check("--seconds", args.seconds, Interval::OpenClosed(0.0, 60.0))?;
     let mut env = match &args.config {
         Some(path) => env_of(path)?,
         None => EnvConfig::default(),

@@ -29,6 +29,10 @@ pub struct RunArgs {
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    if let Some(n) = args.stop_after {
+        // Stopping after no task would train nothing and report an empty run.
+        anyhow::ensure!(n >= 1, "--stop-after = {n}: expected at least 1 task");
+    }
     let m = quadcl::headless::run(
         &args.config,
         &args.out,

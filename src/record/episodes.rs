@@ -8,6 +8,8 @@
 use super::recorder::Recorder;
 use super::rerun::RerunSink;
 use super::rerun_scene::RerunScene;
+use crate::config::bounds::{self, Interval};
+use crate::config::env::check_command;
 use crate::rl::RobotViewer;
 use anyhow::Context;
 use std::path::Path;
@@ -115,12 +117,13 @@ fn refuse_existing(out: &Path, force: bool, flag: &str) -> anyhow::Result<()> {
 }
 
 fn check_options(o: &RecordOptions) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        o.seconds.is_finite() && o.seconds > 0.0 && o.seconds <= MAX_SECONDS,
-        "--seconds must be in (0, {MAX_SECONDS}], got {}",
-        o.seconds
-    );
+    bounds::check("--seconds", o.seconds, Interval::OpenClosed(0.0, MAX_SECONDS))?;
     anyhow::ensure!(o.episodes != Some(0), "--episodes must be at least 1");
+    if let Some(command) = o.command {
+        for (option, v) in ["--vx", "--vy", "--wz"].into_iter().zip(command) {
+            check_command(option, v)?;
+        }
+    }
     Ok(())
 }
 
