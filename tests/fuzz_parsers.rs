@@ -1,7 +1,8 @@
 //! Fuzzing every parser and loader (issue 16 item 7): no input panics. A
 //! seeded mutation fuzzer on stable Rust (no nightly, no new dependency):
-//! each target starts from a committed seed corpus (the shipped scenes and
-//! `tests/fuzz_corpus/`), mutates it (byte flips, insertions of tokens the
+//! each target starts from a committed seed corpus (the shipped scenes,
+//! `tests/fuzz_corpus/` and the shipped base policy; the training-checkpoint
+//! targets from a tiny training the test runs first), mutates it (byte flips, insertions of tokens the
 //! format cares about, deletions, duplications, truncations) and feeds every
 //! result to the loader, which may return an error but must not panic.
 //!
@@ -233,7 +234,7 @@ fn fuzz_policy_directories() {
 }
 
 #[test]
-fn fuzz_training_states() {
+fn fuzz_training_checkpoints() {
     // A real training state (tiny networks, 3 robots, 2 iterations: checkpoints at both),
     // then its bytes mutated: reading must not panic, and what reads is restored into the
     // learner and envs of that checkpoint, which may refuse it but must not panic either.
@@ -270,5 +271,24 @@ fn fuzz_training_states() {
         if let Ok(read) = TrainingState::read(&path) {
             let _ = read.restore(&mut learner, &mut env);
         }
+    });
+
+    // The checkpoint's model file, mutated, with the manifest's hash of it made to match, so
+    // the tensor reader and every check behind the hash see the mutations.
+    let checkpoint = run.path().join("checkpoint");
+    let copy = run.path().join("mutated");
+    std::fs::create_dir_all(&copy).unwrap();
+    for f in ["masks.safetensors", "manifest.json"] {
+        std::fs::copy(checkpoint.join(f), copy.join(f)).unwrap();
+    }
+    let model = std::fs::read(checkpoint.join("model.safetensors")).unwrap();
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(checkpoint.join("manifest.json")).unwrap()).unwrap();
+    fuzz("checkpoint-model", std::slice::from_ref(&model), tokens, |input| {
+        let mut m = manifest.clone();
+        m["files"]["model.safetensors"] = quadcl::util::sha256_hex(input).into();
+        std::fs::write(copy.join("manifest.json"), serde_json::to_vec(&m).unwrap()).unwrap();
+        std::fs::write(copy.join("model.safetensors"), input).unwrap();
+        let _ = quadcl::rl::load_policy_or_checkpoint(&copy);
     });
 }

@@ -44,6 +44,7 @@ fn existing_run(out: &std::path::Path) -> Option<&'static str> {
 pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     let mut config = Config::load(&args.config)?;
     if let Some(iterations) = args.iterations {
+        quadcl::config::bounds::check_count("--iterations", iterations, 1, quadcl::config::ppo::MAX_ITERATIONS)?;
         config.ppo.iterations = iterations;
     }
     if let Some(seed) = args.seed {
