@@ -112,7 +112,7 @@ fn a_training_crashed_mid_iteration_and_resumed_ends_as_one_that_never_stopped()
     let mut crashing = Crashing { inner: sim_env(&cfg), steps_left: 5 * 16 + 9 };
     let err = train_from(&cfg, "none", &mut crashing, dir.path(), false, None).unwrap_err();
     assert!(format!("{err:#}").contains("crashed"), "{err:#}");
-    assert_eq!(untimed_rows(dir.path()).len(), 4, "rows up to the checkpoint are on disk");
+    assert_eq!(untimed_rows(dir.path()).len(), 5, "every finished iteration has its row on disk");
 
     let point = load_resume_point(&cfg, "none", dir.path()).unwrap();
     assert_eq!(point.state.iteration, 4);

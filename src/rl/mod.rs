@@ -15,6 +15,7 @@
 //! | `trainer` | one task's training run: `metrics.jsonl`, checkpoints, policy directory |
 //! | `training_state` | what a checkpoint keeps beyond the policy so that a resume is exact (Adam, streams, envs) |
 //! | `metrics` | the [`Metrics`] of an iteration and the metric names every loop shares |
+//! | `metrics_log` | `metrics.jsonl`, a row appended per iteration, cut to the checkpoint on resume |
 //! | `progress` | what every training loop shares in reporting: the bar, the iteration line, the step and time counters |
 //! | `evaluate` | deterministic evaluation, one episode per env: the `quadcl eval` figures |
 //! | `gait` | the contact pattern of a policy under one held command |
@@ -33,6 +34,7 @@ mod evaluate;
 mod gait;
 mod losses;
 mod metrics;
+mod metrics_log;
 mod normalizer;
 mod policy_dir;
 mod ppo;

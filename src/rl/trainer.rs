@@ -30,6 +30,7 @@
 use super::agent::Agent;
 use super::env::TrainEnv;
 use super::metrics::Metrics;
+use super::metrics_log::MetricsLog;
 use super::policy_dir::{load_training_checkpoint, save_policy, PolicyInfo};
 use super::ppo::PpoLearner;
 use super::progress::{iteration_summary, progress_bar, TrainingClock};
@@ -39,9 +40,6 @@ use crate::util::{derive_seed, replace_dir, write_atomic, Stream};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-
-/// Rewrite `metrics.jsonl` at least every this many iterations.
-const METRICS_FLUSH_EVERY: usize = 10;
 
 /// What a finished run reports.
 #[derive(Debug, Clone)]
@@ -198,14 +196,16 @@ pub fn train_from(
         env.keep_replays()?;
     }
     write_atomic(&out.join("config.toml"), config.to_toml_string().as_bytes())?;
-    let (mut learner, done, mut log) = match resume {
+    let metrics_path = out.join("metrics.jsonl");
+    let (mut learner, done, mut log, kept) = match resume {
         None => {
             let mut agent = Agent::new(env.dims(), config, config.seed)?;
             agent.begin_task(0, &[])?;
             (
                 PpoLearner::new(cfg.clone(), agent, env.num_envs(), derive_seed(config.seed, Stream::Trainer(0)))?,
                 None,
-                String::new(),
+                MetricsLog::create(&metrics_path)?,
+                Vec::new(),
             )
         }
         Some(ResumePoint { agent, state, training }) => {
@@ -233,10 +233,9 @@ pub fn train_from(
                     out.join("checkpoint").display()
                 ),
             }
-            let path = out.join("metrics.jsonl");
-            let text = std::fs::read_to_string(&path).unwrap_or_default();
-            let kept: String = text.lines().take(state.iteration).flat_map(|l| [l, "\n"]).collect();
-            (learner, Some(state), kept)
+            // Rows after the checkpoint go (also when a resume has nothing left to train).
+            let (log, kept) = MetricsLog::resume(&metrics_path, state.iteration)?;
+            (learner, Some(state), log, kept)
         }
     };
     let first = done.as_ref().map_or(0, |s| s.iteration);
@@ -247,9 +246,7 @@ pub fn train_from(
     let mut clock =
         TrainingClock::new(done.as_ref().map_or(0, |s| s.env_steps), done.as_ref().map_or(0.0, |s| s.wall_s));
     // A resumed run's time splits start from the kept rows, so the summary covers the whole run.
-    let kept_time = |key: &str| -> f64 {
-        log.lines().filter_map(|l| serde_json::from_str::<Metrics>(l).ok()).filter_map(|m| m.get(key).copied()).sum()
-    };
+    let kept_time = |key: &str| -> f64 { kept.iter().filter_map(|m| m.get(key).copied()).sum() };
     let mut summary = TrainSummary {
         iterations: 0,
         env_steps: 0,
@@ -267,16 +264,13 @@ pub fn train_from(
         summary.env_s += m.get("time/env_s").copied().unwrap_or(0.0);
         summary.policy_s += m.get("time/policy_s").copied().unwrap_or(0.0);
         summary.update_s += m.get("time/update_s").copied().unwrap_or(0.0);
-        log.push_str(&serde_json::to_string(&m)?);
-        log.push('\n');
+        log.append(&m)?;
         let last = it + 1 == cfg.iterations;
         // The last iteration is checkpointed too (before the task ends), so a
         // finished run can be resumed with a larger `--iterations`.
         let checkpoint = cfg.checkpoint_every > 0 && ((it + 1) % cfg.checkpoint_every == 0 || last);
-        if last || checkpoint || (it + 1) % METRICS_FLUSH_EVERY == 0 {
-            write_atomic(&out.join("metrics.jsonl"), log.as_bytes())?;
-        }
         if checkpoint {
+            log.sync()?;
             let state = TrainerState {
                 iteration: it + 1,
                 learning_rate: learner.optimizer.learning_rate(),
@@ -293,8 +287,7 @@ pub fn train_from(
         summary.last = m;
     }
     bar.finish();
-    // Also when a resume had nothing left to train: the rows after the checkpoint go.
-    write_atomic(&out.join("metrics.jsonl"), log.as_bytes())?;
+    log.sync()?;
     learner.end_task()?;
     save_policy(&learner.agent, &[task.to_string()], &info_at(cfg.iterations), &out.join("policy"))?;
     summary.iterations = cfg.iterations;
