@@ -58,12 +58,20 @@ impl<'a> Reader<'a> {
         Ok(t.data())
     }
 
+    /// A tensor of `dtype` as values of N little-endian bytes each.
+    fn le_values<const N: usize, T>(
+        &self,
+        name: &str,
+        dtype: Dtype,
+        shape: &[usize],
+        from_le: fn([u8; N]) -> T,
+    ) -> anyhow::Result<Vec<T>> {
+        let bytes = self.raw(name, dtype, shape)?;
+        Ok(bytes.chunks_exact(N).map(|c| from_le(c.try_into().unwrap_or([0; N]))).collect())
+    }
+
     pub(crate) fn f32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f32>> {
-        Ok(self
-            .raw(name, Dtype::F32, shape)?
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect())
+        self.le_values(name, Dtype::F32, shape, f32::from_le_bytes)
     }
 
     /// "{layer}.log_sigma", or ln of "{layer}.sigma" in files from before sigma was trained in log space.
@@ -82,27 +90,15 @@ impl<'a> Reader<'a> {
     }
 
     pub(crate) fn u32s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u32>> {
-        Ok(self
-            .raw(name, Dtype::U32, shape)?
-            .chunks_exact(4)
-            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect())
+        self.le_values(name, Dtype::U32, shape, u32::from_le_bytes)
     }
 
     pub(crate) fn f64s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<f64>> {
-        Ok(self
-            .raw(name, Dtype::F64, shape)?
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or_default()))
-            .collect())
+        self.le_values(name, Dtype::F64, shape, f64::from_le_bytes)
     }
 
     pub(crate) fn u64s(&self, name: &str, shape: &[usize]) -> anyhow::Result<Vec<u64>> {
-        Ok(self
-            .raw(name, Dtype::U64, shape)?
-            .chunks_exact(8)
-            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
-            .collect())
+        self.le_values(name, Dtype::U64, shape, u64::from_le_bytes)
     }
 
     /// The names of the file's tensors.
