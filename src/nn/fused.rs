@@ -16,6 +16,7 @@
 //! buffers are made for the (batch, 512) activations.
 
 use super::activation::contiguous_f32;
+use super::wide::wide;
 use crate::config::net::Activation;
 use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
 use gemm::{gemm, Parallelism};
@@ -69,8 +70,8 @@ pub(crate) fn elu(x: f32) -> f32 {
 /// inside the loop compiled to a jump per element, not vector code).
 fn activate_in_place(act: Activation, v: &mut [f32]) {
     match act {
-        Activation::Elu => v.par_chunks_mut(CHUNK).for_each(|c| c.iter_mut().for_each(|v| *v = elu(*v))),
-        Activation::Relu => v.par_chunks_mut(CHUNK).for_each(|c| c.iter_mut().for_each(|v| *v = v.max(0.0))),
+        Activation::Elu => v.par_chunks_mut(CHUNK).for_each(|c| wide(|| c.iter_mut().for_each(|v| *v = elu(*v)))),
+        Activation::Relu => v.par_chunks_mut(CHUNK).for_each(|c| wide(|| c.iter_mut().for_each(|v| *v = v.max(0.0)))),
         Activation::Tanh => v.par_chunks_mut(CHUNK).for_each(|c| c.iter_mut().for_each(|v| *v = v.tanh())),
         Activation::Identity => {}
     }
@@ -80,9 +81,11 @@ fn activate_in_place(act: Activation, v: &mut [f32]) {
 fn activation_grad_in_place(act: Activation, g: &mut [f32], y: &[f32]) {
     fn apply(g: &mut [f32], y: &[f32], derivative: impl Fn(f32) -> f32 + Sync) {
         g.par_chunks_mut(CHUNK).zip(y.par_chunks(CHUNK)).for_each(|(g, y)| {
-            for (g, &y) in g.iter_mut().zip(y) {
-                *g *= derivative(y);
-            }
+            wide(|| {
+                for (g, &y) in g.iter_mut().zip(y) {
+                    *g *= derivative(y);
+                }
+            })
         });
     }
     match act {

@@ -19,6 +19,7 @@
 //! and their gradient buffers per layer.
 
 use super::activation::{contiguous_f32, with_f32_slice};
+use super::wide::wide;
 use candle_core::{CpuStorage, CustomOp3, Layout, Shape, Tensor};
 use rayon::prelude::*;
 
@@ -48,11 +49,9 @@ impl CustomOp3 for MaskedWeight {
         let w = contiguous_f32(s1, l1, self.name())?;
         let out = with_f32_slice(&self.mask, "mask", |m| {
             let mut out = vec![0f32; w.len()];
-            out.par_chunks_mut(CHUNK).zip(w.par_chunks(CHUNK).zip(m.par_chunks(CHUNK))).for_each(|(o, (w, m))| {
-                for ((o, w), m) in o.iter_mut().zip(w).zip(m) {
-                    *o = w * m;
-                }
-            });
+            out.par_chunks_mut(CHUNK)
+                .zip(w.par_chunks(CHUNK).zip(m.par_chunks(CHUNK)))
+                .for_each(|(o, (w, m))| wide(|| o.iter_mut().zip(w).zip(m).for_each(|((o, w), m)| *o = w * m)));
             out
         })?;
         Ok((CpuStorage::F32(out), l1.shape().clone()))
@@ -71,11 +70,9 @@ impl CustomOp3 for MaskedWeight {
         let grad_weight = with_f32_slice(&g, "gradient", |g| {
             with_f32_slice(&self.mask, "mask", |m| {
                 let mut out = vec![0f32; g.len()];
-                out.par_chunks_mut(CHUNK).zip(g.par_chunks(CHUNK).zip(m.par_chunks(CHUNK))).for_each(|(o, (g, m))| {
-                    for ((o, g), m) in o.iter_mut().zip(g).zip(m) {
-                        *o = g * m;
-                    }
-                });
+                out.par_chunks_mut(CHUNK)
+                    .zip(g.par_chunks(CHUNK).zip(m.par_chunks(CHUNK)))
+                    .for_each(|(o, (g, m))| wide(|| o.iter_mut().zip(g).zip(m).for_each(|((o, g), m)| *o = g * m)));
                 out
             })
         })??;
@@ -90,12 +87,14 @@ impl CustomOp3 for MaskedWeight {
                         .par_chunks_mut(CHUNK)
                         .zip(g.par_chunks(CHUNK).zip(w.par_chunks(CHUNK)).zip(eps.par_chunks(CHUNK)))
                         .map(|(o, ((g, w), e))| {
-                            let mut sum = 0f64;
-                            for (((o, g), w), e) in o.iter_mut().zip(g).zip(w).zip(e) {
-                                *o = g * w;
-                                sum += f64::from(*o * e);
-                            }
-                            sum
+                            wide(|| {
+                                let mut sum = 0f64;
+                                for (((o, g), w), e) in o.iter_mut().zip(g).zip(w).zip(e) {
+                                    *o = g * w;
+                                    sum += f64::from(*o * e);
+                                }
+                                sum
+                            })
                         })
                         .collect();
                     (out, partial.iter().sum::<f64>())

@@ -9,6 +9,7 @@
 //! - `network`: [`Network`], either of the two, as the agent and checkpoints hold them;
 //! - `fused`: the whole MLP as one candle custom op (the speed path: gemm on slices, one backward pass);
 //! - `activation`: a fused ELU as candle custom ops (layer-by-layer reference path);
+//! - `wide`: element-wise loops at the CPU's vector width (AVX-512 or AVX2, chosen at run time);
 //! - `optim`: [`MaskedAdam`], which never moves a frozen element;
 //! - [`checkpoint`]: policy directories (safetensors + bit-packed masks + manifest);
 //! - `stats`: the mask statistics printed by `quadcl masks`;
@@ -29,6 +30,7 @@ mod optim;
 mod select;
 mod state;
 mod stats;
+mod wide;
 
 pub use crate::config::net::{
     Activation, BiasStart, EntropyTarget, MaskConfig, NetworkKind, SelectionRule, SigmaScale,

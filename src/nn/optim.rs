@@ -78,15 +78,17 @@ const LANES: usize = 8;
 /// Sum of squares in f64 of the elements whose mask is not 0 (all without a mask):
 /// element i goes to lane i mod 8, the lanes are added in order.
 fn square_sum(g: &[f32], mask: Option<&[f32]>) -> f64 {
-    let mut lanes = [0f64; LANES];
-    for (k, chunk) in g.chunks(LANES).enumerate() {
-        for (j, v) in chunk.iter().enumerate() {
-            let moves = mask.is_none_or(|m| m[k * LANES + j] != 0.0);
-            let v = if moves { f64::from(*v) } else { 0.0 };
-            lanes[j] += v * v;
+    super::wide::wide(|| {
+        let mut lanes = [0f64; LANES];
+        for (k, chunk) in g.chunks(LANES).enumerate() {
+            for (j, v) in chunk.iter().enumerate() {
+                let moves = mask.is_none_or(|m| m[k * LANES + j] != 0.0);
+                let v = if moves { f64::from(*v) } else { 0.0 };
+                lanes[j] += v * v;
+            }
         }
-    }
-    lanes.iter().sum()
+        lanes.iter().sum()
+    })
 }
 
 impl MaskedAdam {
@@ -200,7 +202,7 @@ impl MaskedAdam {
                     (w - step_size * m / (v.sqrt() / bc2_sqrt + eps), m, v)
                 };
                 let elements = w.iter_mut().zip(mom.m.iter_mut()).zip(mom.v.iter_mut()).zip(g);
-                match mask {
+                super::wide::wide(|| match mask {
                     Some(mask) => {
                         for ((((w, m), v), &g), frozen) in elements.zip(mask.iter().map(|k| *k == 0.0)) {
                             let (w1, m1, v1) = stepped(*w, *m, *v, g);
@@ -212,7 +214,7 @@ impl MaskedAdam {
                             (*w, *m, *v) = stepped(*w, *m, *v, g);
                         }
                     }
-                }
+                });
                 Ok(())
             })?
             .transpose()?;
