@@ -13,7 +13,9 @@ pub enum Stream {
     Env(usize),
     /// `quadcl train`'s learner stream (minibatches, action noise, mask draws)
     /// of a run that starts at `iteration` (0: a fresh run). A run resumed at
-    /// `iteration > 0` also seeds its environments with it. Derived from the master seed.
+    /// `iteration > 0` from a checkpoint without a training state (written before
+    /// resumes were exact) also seeds its environments with it; an exact resume
+    /// restores the interrupted run's streams instead. Derived from the master seed.
     Trainer(usize),
     /// Every stream of training step `step` of a sequence (learner, optimiser,
     /// mask draws). Derived from the master seed.

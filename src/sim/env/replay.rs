@@ -5,9 +5,13 @@
 //! steps in another process lands on the same state bit for bit, contact
 //! caches and solver warm starts included, without serialising rapier.
 //!
+//! The replay runs under the env's own task and configuration: a task changed
+//! in mid-episode (`set_task`, which only sequences do, between tasks) is not
+//! part of it.
+//!
 //! Kept only when asked ([`LocomotionEnv::keep_replay`]: training that
 //! checkpoints); it costs ACT_DIM f32 per control step of the current episode
-//! (48 KB for a 20 s episode at 50 Hz), released at each reset.
+//! (48 KB for a 20 s episode at 50 Hz), cleared at each reset (its capacity kept).
 
 use super::LocomotionEnv;
 use crate::sim::obs::ACT_DIM;
