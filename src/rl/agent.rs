@@ -193,7 +193,8 @@ impl Agent {
         Ok(self)
     }
 
-    fn networks_mut(&mut self) -> [&mut Network; 4] {
+    /// The four networks, in checkpoint order, to change.
+    pub(crate) fn networks_mut(&mut self) -> [&mut Network; 4] {
         [&mut self.actor, &mut self.critic, &mut self.encoder, &mut self.decoder]
     }
 

@@ -23,7 +23,7 @@
 
 use super::env::{EpisodeSummary, TrainEnv};
 use super::ppo::{PpoLearner, EPISODE_WINDOW};
-use crate::nn::checkpoint::tensors::{f32_raw, le_raw, serialize, Raw, Reader};
+use crate::nn::checkpoint::tensors::{f32_raw, f64_raw, serialize, u64_raw, u8_raw, Raw, Reader};
 use crate::nn::{Moments, Network};
 use crate::sim::reward::NUM_TERMS;
 use crate::sim::{EpisodeReplay, Intervention, ACT_DIM};
@@ -52,11 +52,8 @@ pub struct TrainingState {
     envs: Option<Vec<EpisodeReplay>>,
 }
 
-/// The learner's four networks by the names the file uses.
-fn named_networks(learner: &mut PpoLearner) -> [(&'static str, &mut Network); 4] {
-    let a = &mut learner.agent;
-    [("actor", &mut a.actor), ("critic", &mut a.critic), ("encoder", &mut a.encoder), ("decoder", &mut a.decoder)]
-}
+/// The names the file gives the agent's four networks, in [`super::Agent::networks`] order.
+const NETWORK_NAMES: [&str; 4] = ["actor", "critic", "encoder", "decoder"];
 
 impl TrainingState {
     /// The state of `learner` and `env` between two iterations.
@@ -67,9 +64,7 @@ impl TrainingState {
             (mean.to_vec(), var.to_vec(), count)
         };
         let mut selections = BTreeMap::new();
-        for (name, net) in
-            [("actor", &a.actor), ("critic", &a.critic), ("encoder", &a.encoder), ("decoder", &a.decoder)]
-        {
+        for (name, net) in NETWORK_NAMES.into_iter().zip(a.networks()) {
             for (i, layer) in net.as_masked().map(|m| m.layers()).unwrap_or_default().iter().enumerate() {
                 if let Some(s) = layer.previous_selection() {
                     selections.insert((name.to_string(), i), s.to_vec());
@@ -115,7 +110,7 @@ impl TrainingState {
         learner.agent.obs_normalizer.restore_exact(mean, var, count).context("the observation statistics")?;
         let (mean, var, count) = self.privileged_stats;
         learner.agent.privileged_normalizer.restore_exact(mean, var, count).context("the privileged statistics")?;
-        for (name, net) in named_networks(learner) {
+        for (name, net) in NETWORK_NAMES.into_iter().zip(learner.agent.networks_mut()) {
             let Network::Masked(m) = net else { continue };
             for (i, layer) in m.layers.iter_mut().enumerate() {
                 if let Some(s) = self.selections.get(&(name.to_string(), i)) {
@@ -138,27 +133,24 @@ impl TrainingState {
     /// The file's bytes.
     pub fn to_bytes(&self) -> anyhow::Result<Vec<u8>> {
         let mut t: BTreeMap<String, Raw> = BTreeMap::new();
-        let bytes = |b: Vec<u8>| Raw { dtype: Dtype::U8, shape: vec![b.len()], bytes: b };
-        let u64s = |v: &[u64], shape: Vec<usize>| le_raw(Dtype::U64, v, shape, u64::to_le_bytes);
-        let f64s = |v: &[f64], shape: Vec<usize>| le_raw(Dtype::F64, v, shape, f64::to_le_bytes);
-        t.insert("learner.rng".into(), bytes(self.rng.to_bytes().to_vec()));
+        t.insert("learner.rng".into(), u8_raw(self.rng.to_bytes().to_vec(), vec![RNG_STATE_BYTES]));
         for (name, mom) in &self.moments {
             t.insert(format!("adam.{name}.m"), f32_raw(&mom.m, vec![mom.m.len()]));
             t.insert(format!("adam.{name}.v"), f32_raw(&mom.v, vec![mom.v.len()]));
-            t.insert(format!("adam.{name}.step"), u64s(&[mom.step as u64], vec![1]));
+            t.insert(format!("adam.{name}.step"), u64_raw(&[mom.step as u64], vec![1]));
         }
         for (which, (mean, var, count)) in [("obs", &self.obs_stats), ("privileged", &self.privileged_stats)] {
-            t.insert(format!("normalizer.{which}.mean"), f64s(mean, vec![mean.len()]));
-            t.insert(format!("normalizer.{which}.var"), f64s(var, vec![var.len()]));
-            t.insert(format!("normalizer.{which}.count"), f64s(&[*count], vec![1]));
+            t.insert(format!("normalizer.{which}.mean"), f64_raw(mean, vec![mean.len()]));
+            t.insert(format!("normalizer.{which}.var"), f64_raw(var, vec![var.len()]));
+            t.insert(format!("normalizer.{which}.count"), f64_raw(&[*count], vec![1]));
         }
         for ((net, i), s) in &self.selections {
-            t.insert(format!("selection.{net}.{i}"), bytes(s.iter().map(|b| u8::from(*b)).collect()));
+            t.insert(format!("selection.{net}.{i}"), u8_raw(s.iter().map(|b| u8::from(*b)).collect(), vec![s.len()]));
         }
         let rows: Vec<f32> = self.episodes.iter().flat_map(episode_row).collect();
         t.insert("episodes".into(), f32_raw(&rows, vec![self.episodes.len(), EPISODE_VALUES]));
         let envs: Vec<u64> = self.episodes.iter().map(|e| e.env as u64).collect();
-        t.insert("episodes.env".into(), u64s(&envs, vec![envs.len()]));
+        t.insert("episodes.env".into(), u64_raw(&envs, vec![envs.len()]));
         if let Some(replays) = &self.envs {
             write_replays(replays, &mut t);
         }
@@ -242,15 +234,14 @@ fn episode_of(row: &[f32], env: u64) -> EpisodeSummary {
 
 fn write_replays(replays: &[EpisodeReplay], t: &mut BTreeMap<String, Raw>) {
     let n = replays.len();
-    let u64s = |v: &[u64], shape: Vec<usize>| le_raw(Dtype::U64, v, shape, u64::to_le_bytes);
     let rngs: Vec<u8> = replays.iter().flat_map(|r| r.start_rng.to_bytes()).collect();
-    t.insert("envs.rng".into(), Raw { dtype: Dtype::U8, shape: vec![n, RNG_STATE_BYTES], bytes: rngs });
+    t.insert("envs.rng".into(), u8_raw(rngs, vec![n, RNG_STATE_BYTES]));
     let steps: Vec<u64> = replays.iter().map(|r| r.steps() as u64).collect();
-    t.insert("envs.steps".into(), u64s(&steps, vec![n]));
+    t.insert("envs.steps".into(), u64_raw(&steps, vec![n]));
     let total: Vec<u64> = replays.iter().map(|r| r.total_steps).collect();
-    t.insert("envs.total_steps".into(), u64s(&total, vec![n]));
+    t.insert("envs.total_steps".into(), u64_raw(&total, vec![n]));
     let time: Vec<f64> = replays.iter().map(|r| r.sim_time).collect();
-    t.insert("envs.sim_time".into(), le_raw(Dtype::F64, &time, vec![n], f64::to_le_bytes));
+    t.insert("envs.sim_time".into(), f64_raw(&time, vec![n]));
     let actions: Vec<f32> = replays.iter().flat_map(|r| r.actions.iter().copied()).collect();
     t.insert("envs.actions".into(), f32_raw(&actions, vec![actions.len() / ACT_DIM, ACT_DIM]));
     let (mut at, mut values) = (Vec::new(), Vec::new());
@@ -264,7 +255,7 @@ fn write_replays(replays: &[EpisodeReplay], t: &mut BTreeMap<String, Raw>) {
             values.extend(v);
         }
     }
-    t.insert("envs.interventions".into(), u64s(&at, vec![at.len() / 3, 3]));
+    t.insert("envs.interventions".into(), u64_raw(&at, vec![at.len() / 3, 3]));
     t.insert("envs.intervention_values".into(), f32_raw(&values, vec![values.len() / 3, 3]));
 }
 

@@ -14,18 +14,26 @@ pub(crate) struct Raw {
     pub bytes: Vec<u8>,
 }
 
-pub(crate) fn f32_raw(values: &[f32], shape: Vec<usize>) -> Raw {
-    Raw { dtype: Dtype::F32, shape, bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect() }
+/// Little-endian bytes of `values`, N bytes each, as one tensor of `dtype`.
+fn le_raw<const N: usize, T: Copy>(dtype: Dtype, values: &[T], shape: Vec<usize>, to_le: fn(T) -> [u8; N]) -> Raw {
+    Raw { dtype, shape, bytes: values.iter().flat_map(|v| to_le(*v)).collect() }
 }
 
-/// Little-endian bytes of `values` (f64, u64, i64 ...) as one tensor of `dtype`.
-pub(crate) fn le_raw<const N: usize, T: Copy>(
-    dtype: Dtype,
-    values: &[T],
-    shape: Vec<usize>,
-    to_le: impl Fn(T) -> [u8; N],
-) -> Raw {
-    Raw { dtype, shape, bytes: values.iter().flat_map(|v| to_le(*v)).collect() }
+pub(crate) fn f32_raw(values: &[f32], shape: Vec<usize>) -> Raw {
+    le_raw(Dtype::F32, values, shape, f32::to_le_bytes)
+}
+
+pub(crate) fn f64_raw(values: &[f64], shape: Vec<usize>) -> Raw {
+    le_raw(Dtype::F64, values, shape, f64::to_le_bytes)
+}
+
+pub(crate) fn u64_raw(values: &[u64], shape: Vec<usize>) -> Raw {
+    le_raw(Dtype::U64, values, shape, u64::to_le_bytes)
+}
+
+/// Bytes as one U8 tensor of `shape`.
+pub(crate) fn u8_raw(bytes: Vec<u8>, shape: Vec<usize>) -> Raw {
+    Raw { dtype: Dtype::U8, shape, bytes }
 }
 
 pub(crate) fn serialize(

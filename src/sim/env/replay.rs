@@ -50,7 +50,7 @@ impl EpisodeReplay {
 }
 
 /// The part of the replay an env keeps while it steps.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub(super) struct EpisodeLog {
     pub actions: Vec<f32>,
     pub interventions: Vec<(usize, Intervention)>,
@@ -65,7 +65,7 @@ impl LocomotionEnv {
             self.env_index,
             self.episode_step
         );
-        self.replay_log = Some(EpisodeLog { actions: Vec::new(), interventions: Vec::new() });
+        self.replay_log = Some(EpisodeLog::default());
         Ok(())
     }
 
@@ -102,7 +102,7 @@ impl LocomotionEnv {
     fn replay_steps(&mut self, replay: &EpisodeReplay) -> anyhow::Result<()> {
         self.rng = replay.start_rng.rng();
         self.reset_episode()?;
-        self.replay_log = Some(EpisodeLog { actions: Vec::new(), interventions: Vec::new() });
+        self.replay_log = Some(EpisodeLog::default());
         let steps = replay.steps();
         let mut interventions = replay.interventions.iter().peekable();
         for s in 0..=steps {
