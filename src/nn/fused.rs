@@ -15,7 +15,7 @@
 //! candle's autograd sees a single node, so none of its per-node gradient
 //! buffers are made for the (batch, 512) activations.
 
-use super::activation::contiguous_f32;
+use super::activation::{contiguous_f32, with_f32_slice};
 use super::wide::wide;
 use crate::config::net::Activation;
 use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
@@ -173,14 +173,15 @@ pub fn theta_len(sizes: &[usize]) -> usize {
     offsets(sizes).1
 }
 
-/// What a forward keeps for its backward: the input, every hidden layer's output, theta.
-type Saved = (Vec<f32>, Vec<Vec<f32>>, Vec<f32>);
+/// What a forward keeps for its backward: every hidden layer's output (the input and theta
+/// are the op's arguments, which the backward is handed again).
+type Saved = Vec<Vec<f32>>;
 
 /// The fused MLP op; one instance per forward call (it keeps that call's activations).
 pub struct FusedMlp {
     sizes: Vec<usize>,
     activation: Activation,
-    /// (input, hidden outputs after activation) of the forward, for backward.
+    /// The hidden outputs after activation of the forward, for backward.
     saved: Mutex<Option<Saved>>,
 }
 
@@ -208,7 +209,7 @@ impl FusedMlp {
             }
         }
         if keep {
-            *self.saved.lock().expect("fused MLP lock") = Some((x.to_vec(), hidden, theta.to_vec()));
+            *self.saved.lock().expect("fused MLP lock") = Some(hidden);
         }
         out
     }
@@ -281,19 +282,43 @@ impl CustomOp2 for FusedMlp {
     fn bwd(
         &self,
         arg1: &Tensor,
-        _arg2: &Tensor,
+        arg2: &Tensor,
         _res: &Tensor,
         grad_res: &Tensor,
     ) -> candle_core::Result<(Option<Tensor>, Option<Tensor>)> {
         let guard = self.saved.lock().expect("fused MLP lock");
-        let Some((x, hidden, theta)) = guard.as_ref() else {
-            candle_core::bail!("fused-mlp: backward without forward")
+        let Some(hidden) = guard.as_ref() else { candle_core::bail!("fused-mlp: backward without forward") };
+        let g = grad_res.contiguous()?.flatten_all()?.to_vec1::<f32>()?;
+        let need_x = arg1.track_op();
+        let (x, theta) = (arg1.contiguous()?, arg2.contiguous()?);
+        let (grad_x, grad_theta) = with_f32_slice(&x, self.name(), |x| {
+            with_f32_slice(&theta, self.name(), |theta| self.backward(x, theta, hidden, g, need_x))
+        })??;
+        let batch = x.dims()[0];
+        let grad_x = match grad_x {
+            Some(g) => Some(Tensor::from_vec(g, (batch, self.sizes[0]), &candle_core::Device::Cpu)?),
+            None => None,
         };
-        let mut g = grad_res.contiguous()?.flatten_all()?.to_vec1::<f32>()?;
+        let total = grad_theta.len();
+        Ok((grad_x, Some(Tensor::from_vec(grad_theta, total, &candle_core::Device::Cpu)?)))
+    }
+}
+
+impl FusedMlp {
+    /// The backward pass on slices: x (batch, sizes[0]) and theta as the forward had them,
+    /// its hidden outputs, and g the output's gradient (batch, sizes[last]). Returns
+    /// (grad_x when `need_x`, grad_theta).
+    fn backward(
+        &self,
+        x: &[f32],
+        theta: &[f32],
+        hidden: &[Vec<f32>],
+        mut g: Vec<f32>,
+        need_x: bool,
+    ) -> (Option<Vec<f32>>, Vec<f32>) {
         let batch = x.len() / self.sizes[0];
         let (offs, total) = offsets(&self.sizes);
         let mut grad_theta = vec![0f32; total];
-        let need_x = arg1.track_op();
         for l in (0..offs.len()).rev() {
             let (fan_in, width) = (self.sizes[l], self.sizes[l + 1]);
             let (w_at, b_at) = offs[l];
@@ -329,9 +354,7 @@ impl CustomOp2 for FusedMlp {
                 weight_and_bias(parallelism());
             }
         }
-        let grad_x =
-            if need_x { Some(Tensor::from_vec(g, (batch, self.sizes[0]), &candle_core::Device::Cpu)?) } else { None };
-        Ok((grad_x, Some(Tensor::from_vec(grad_theta, total, &candle_core::Device::Cpu)?)))
+        (need_x.then_some(g), grad_theta)
     }
 }
 

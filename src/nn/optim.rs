@@ -78,17 +78,80 @@ const LANES: usize = 8;
 /// Sum of squares in f64 of the elements whose mask is not 0 (all without a mask):
 /// element i goes to lane i mod 8, the lanes are added in order.
 fn square_sum(g: &[f32], mask: Option<&[f32]>) -> f64 {
-    super::wide::wide(|| {
-        let mut lanes = [0f64; LANES];
-        for (k, chunk) in g.chunks(LANES).enumerate() {
-            for (j, v) in chunk.iter().enumerate() {
-                let moves = mask.is_none_or(|m| m[k * LANES + j] != 0.0);
-                let v = if moves { f64::from(*v) } else { 0.0 };
-                lanes[j] += v * v;
+    super::wide::wide(|| match mask {
+        Some(mask) => {
+            let mask = &mask[..g.len()];
+            square_sum_lanes(g, |i| mask[i] != 0.0)
+        }
+        None => square_sum_lanes(g, |_| true),
+    })
+}
+
+/// [`square_sum`]'s loop over whole chunks of 8 (no bounds check or branch inside, so it is
+/// vector code) and the tail; `moves(i)` says whether element i counts.
+#[inline(always)]
+fn square_sum_lanes(g: &[f32], moves: impl Fn(usize) -> bool) -> f64 {
+    let mut lanes = [0f64; LANES];
+    let whole = g.len() / LANES * LANES;
+    for (k, chunk) in g[..whole].chunks_exact(LANES).enumerate() {
+        for j in 0..LANES {
+            let v = if moves(k * LANES + j) { f64::from(chunk[j]) } else { 0.0 };
+            lanes[j] += v * v;
+        }
+    }
+    for (j, &v) in g[whole..].iter().enumerate() {
+        let v = if moves(whole + j) { f64::from(v) } else { 0.0 };
+        lanes[j] += v * v;
+    }
+    lanes.iter().sum()
+}
+
+/// The constants of one Adam step of one parameter.
+#[derive(Clone, Copy)]
+struct StepConstants {
+    beta1: f32,
+    beta2: f32,
+    /// lr / (1 - beta1^t).
+    step_size: f32,
+    /// sqrt(1 - beta2^t).
+    bc2_sqrt: f32,
+    eps: f32,
+    /// lr * weight_decay.
+    decay: f32,
+}
+
+/// One Adam step over a parameter's elements in place. A frozen element (mask 0), its moments
+/// included, keeps its bits (METHOD 2.2): its step is computed and discarded, a select rather
+/// than a branch. Inlined into [`super::wide::wide`]'s body, with every constant a local value
+/// and the slices of one length, so the loop compiles to full-width vector code.
+#[inline(always)]
+fn adam_elements(w: &mut [f32], m: &mut [f32], v: &mut [f32], g: &[f32], mask: Option<&[f32]>, c: StepConstants) {
+    let n = w.len();
+    let (m, v, g) = (&mut m[..n], &mut v[..n], &g[..n]);
+    let StepConstants { beta1: b1, beta2: b2, step_size, bc2_sqrt, eps, decay } = c;
+    let stepped = |w: f32, m: f32, v: f32, g: f32| {
+        let m = b1 * m + (1.0 - b1) * g;
+        let v = b2 * v + (1.0 - b2) * g * g;
+        let w = w - decay * w;
+        (w - step_size * m / (v.sqrt() / bc2_sqrt + eps), m, v)
+    };
+    match mask {
+        Some(mask) => {
+            let mask = &mask[..n];
+            for i in 0..n {
+                let (w1, m1, v1) = stepped(w[i], m[i], v[i], g[i]);
+                let frozen = mask[i] == 0.0;
+                w[i] = if frozen { w[i] } else { w1 };
+                m[i] = if frozen { m[i] } else { m1 };
+                v[i] = if frozen { v[i] } else { v1 };
             }
         }
-        lanes.iter().sum()
-    })
+        None => {
+            for i in 0..n {
+                (w[i], m[i], v[i]) = stepped(w[i], m[i], v[i], g[i]);
+            }
+        }
+    }
 }
 
 impl MaskedAdam {
@@ -179,42 +242,30 @@ impl MaskedAdam {
         work.into_par_iter().try_for_each(|(p, mom)| -> anyhow::Result<()> {
             let mut w = var_values(&p.var)?;
             mom.step += 1;
-            let (b1, b2) = (c.beta1 as f32, c.beta2 as f32);
             let lr = p.fixed_learning_rate.unwrap_or(c.learning_rate);
-            let step_size = (lr / (1.0 - c.beta1.powi(mom.step))) as f32;
-            let bc2_sqrt = (1.0 - c.beta2.powi(mom.step)).sqrt() as f32;
-            let (eps, decay) = (c.eps as f32, (lr * c.weight_decay) as f32);
+            let constants = StepConstants {
+                beta1: c.beta1 as f32,
+                beta2: c.beta2 as f32,
+                step_size: (lr / (1.0 - c.beta1.powi(mom.step))) as f32,
+                bc2_sqrt: (1.0 - c.beta2.powi(mom.step)).sqrt() as f32,
+                eps: c.eps as f32,
+                decay: (lr * c.weight_decay) as f32,
+            };
             with_grad_and_mask(p, grads, |g, mask| -> anyhow::Result<()> {
                 anyhow::ensure!(
-                    g.len() == w.len(),
+                    g.len() == w.len() && mom.m.len() == w.len() && mom.v.len() == w.len(),
                     "{}: gradient has {} elements, parameter {}",
                     p.name,
                     g.len(),
                     w.len()
                 );
-                // One element's step: (w, m, v) after it. A frozen element, its moments
-                // included, keeps its bits (METHOD 2.2): the step is computed and discarded,
-                // a select rather than a branch, so the loop is vector code.
-                let stepped = |w: f32, m: f32, v: f32, g: f32| {
-                    let m = b1 * m + (1.0 - b1) * g;
-                    let v = b2 * v + (1.0 - b2) * g * g;
-                    let w = w - decay * w;
-                    (w - step_size * m / (v.sqrt() / bc2_sqrt + eps), m, v)
-                };
-                let elements = w.iter_mut().zip(mom.m.iter_mut()).zip(mom.v.iter_mut()).zip(g);
-                super::wide::wide(|| match mask {
-                    Some(mask) => {
-                        for ((((w, m), v), &g), frozen) in elements.zip(mask.iter().map(|k| *k == 0.0)) {
-                            let (w1, m1, v1) = stepped(*w, *m, *v, g);
-                            (*w, *m, *v) = if frozen { (*w, *m, *v) } else { (w1, m1, v1) };
-                        }
-                    }
-                    None => {
-                        for (((w, m), v), &g) in elements {
-                            (*w, *m, *v) = stepped(*w, *m, *v, g);
-                        }
-                    }
-                });
+                anyhow::ensure!(
+                    mask.is_none_or(|m| m.len() == w.len()),
+                    "{}: update mask differs in size from the parameter",
+                    p.name
+                );
+                let (m, v) = (&mut mom.m, &mut mom.v);
+                super::wide::wide(|| adam_elements(&mut w, m, v, g, mask, constants));
                 Ok(())
             })?
             .transpose()?;

@@ -31,10 +31,17 @@ pub fn vacant_quota(vacant_share: f64, k: usize) -> usize {
     ((vacant_share * k as f64).round() as usize).min(k)
 }
 
-/// Sorts `idx` so the highest score comes first, ties by lower index, and keeps the first `k`.
+/// The `k` elements of `idx` with the highest scores, ties by lower index, in no particular
+/// order (the mask is a set). The order (score descending, then index) is total, so the
+/// partition around the k-th (O(n)) picks the same set as a full sort would.
 fn top_k(scores: &[f32], mut idx: Vec<usize>, k: usize) -> Vec<usize> {
-    idx.sort_unstable_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
-    idx.truncate(k);
+    if k == 0 {
+        return Vec::new();
+    }
+    if k < idx.len() {
+        idx.select_nth_unstable_by(k - 1, |&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
+        idx.truncate(k);
+    }
     idx
 }
 
