@@ -83,6 +83,9 @@ pub struct RobotSim {
     effort: [f32; 12],
     /// (lower, upper) position limit of each leg joint, rad.
     limits: [[f32; 2]; 12],
+    /// Whether rapier3d-urdf gave each leg joint a rapier limit (its angular axis in
+    /// `limit_axes`): [`Self::step`] switches that axis on only while the joint is past it.
+    rapier_limits: [bool; 12],
     /// (collider, part) of every robot collider.
     parts: Vec<(ColliderHandle, Part)>,
     ground: ColliderHandle,
@@ -194,6 +197,7 @@ impl RobotSim {
             foot_offsets: robot.foot_offsets,
             effort,
             limits,
+            rapier_limits: [false; 12],
             parts,
             ground,
             gains: *gains,
@@ -202,6 +206,11 @@ impl RobotSim {
             last_torques: [0.0; 12],
         };
         sim.init_gains();
+        let mb = sim.mb();
+        sim.rapier_limits = sim.joint_links.map(|id| {
+            let joint = &mb.link(id).expect("leg link exists").joint;
+            joint.data.limit_axes.contains(JointAxesMask::ANG_X)
+        });
         sim.set_pose(height, q0);
         Ok(sim)
     }
@@ -282,6 +291,7 @@ impl RobotSim {
         let targets = self.targets;
         let limits = self.limits;
         let effort = self.effort.map(|e| e * self.strength);
+        let rapier_limits = self.rapier_limits;
         let mb = self.world.multibody_joints.get_multibody_mut(self.multibody).expect("robot multibody exists");
         for (i, &id) in links.iter().enumerate() {
             let link = mb.link(id).expect("leg link exists");
@@ -300,7 +310,18 @@ impl RobotSim {
             } else {
                 (kp, q + (effort[i].copysign(tau) + kd * qd) / kp)
             };
-            mb.link_mut(id).expect("leg link exists").joint.set_spring(3, stiffness, rest);
+            let joint = &mut mb.link_mut(id).expect("leg link exists").joint;
+            joint.set_spring(3, stiffness, rest);
+            // rapier builds a limit row (one solve against the 18 x 18 mass matrix, and a
+            // row in every solver pass) for every limited axis each step, but a row whose
+            // joint is within its limits has impulse bounds [-0, 0]: it never acts. So the
+            // axis is limited only while the joint is past a limit, by rapier's own test
+            // (`unit_joint_limit_constraint`) on its own stored limits: the same dynamics.
+            if rapier_limits[i] {
+                let stored = joint.data.limits[3];
+                let past = q < stored.min || stored.max < q;
+                joint.data.limit_axes.set(JointAxesMask::ANG_X, past);
+            }
         }
         // rapier may panic on non-finite state (e.g. a NaN bounding box); turn that
         // into an error the env reports with its context.
