@@ -13,7 +13,11 @@
 //! iteration into `physics_ms` (env.step), `policy_ms` (policy and critic
 //! forwards of the rollout, observation normalisation), `update_ms` (the
 //! epochs x minibatches update) and `other_ms` (GAE, bookkeeping), and
-//! `iterations` measured.
+//! `iterations` measured. On a machine shared with other work, also
+//! `fastest_iteration_ms` (the least loaded iteration: compare binaries by it
+//! when the means drift) and `cores_busy` (the process's CPU time over the wall
+//! time of the measured iterations, from /proc/self/stat; absent where there
+//! is none): 2.0 means both cores worked throughout.
 
 use quadcl::config::Config;
 use quadcl::rl::{Agent, PpoLearner, SimTrainEnv, TrainEnv};
@@ -59,6 +63,7 @@ fn measure_config(
         learner.train_iteration(&mut env)?;
     }
     let mut rows = Vec::new();
+    let cpu_start = process_cpu_seconds();
     let start = Instant::now();
     while rows.len() < MIN_ITERATIONS || start.elapsed().as_secs_f64() < seconds {
         let t = Instant::now();
@@ -67,6 +72,9 @@ fn measure_config(
         rows.push(m);
     }
     let wall = start.elapsed().as_secs_f64();
+    let cpu = process_cpu_seconds().zip(cpu_start).map(|(end, start)| end - start);
+    let fastest_ms =
+        rows.iter().filter_map(|m| m.get("bench/iteration_s")).fold(f64::INFINITY, |a, &b| a.min(b)) * 1000.0;
     let steps = rows.len() * config.ppo.num_envs * config.ppo.steps_per_env;
     let iteration_ms = mean_ms(&rows, "bench/iteration_s");
     let physics_ms = mean_ms(&rows, "time/env_s");
@@ -80,7 +88,23 @@ fn measure_config(
     report.insert(format!("{prefix}_update_ms"), json!(round(update_ms)));
     report.insert(format!("{prefix}_other_ms"), json!(round(iteration_ms - physics_ms - policy_ms - update_ms)));
     report.insert(format!("{prefix}_iterations"), json!(rows.len()));
+    report.insert(format!("{prefix}_fastest_iteration_ms"), json!(round(fastest_ms)));
+    if let Some(cpu) = cpu {
+        report.insert(format!("{prefix}_cores_busy"), json!((cpu / wall * 100.0).round() / 100.0));
+    }
     Ok(())
+}
+
+/// The process's CPU time so far (user + system, all threads), seconds: fields 14 and 15
+/// of /proc/self/stat in clock ticks (100 a second on Linux). None where that file is missing.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces: count after it.
+    let after_name = &stat[stat.rfind(')')? + 1..];
+    let fields: Vec<&str> = after_name.split_whitespace().collect();
+    // fields[0] is field 3 (the state), so fields 14 and 15 are at 11 and 12.
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 /// Adds the `ppo*` keys for every configuration (only those named in `which`, when given).
@@ -96,4 +120,26 @@ pub fn measure(
     }
     report.insert("ppo_threads".into(), json!(rayon::current_num_threads()));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn process_cpu_time_grows_with_busy_work() {
+        let before = process_cpu_seconds().expect("/proc/self/stat is readable on Linux");
+        let start = Instant::now();
+        let mut x = 0u64;
+        // Busy until the CPU time has moved by 5 ticks, for at most 10 s of wall time.
+        while process_cpu_seconds().unwrap() < before + 0.05 && start.elapsed().as_secs() < 10 {
+            for i in 0..100_000u64 {
+                x = std::hint::black_box(x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(i));
+            }
+        }
+        let after = process_cpu_seconds().unwrap();
+        assert!(after >= before + 0.05, "CPU time {before} -> {after} s after busy work");
+        assert!(after - before <= start.elapsed().as_secs_f64() * 64.0 + 0.02, "more CPU time than threads could give");
+    }
 }

@@ -78,13 +78,30 @@ const LANES: usize = 8;
 /// Sum of squares in f64 of the elements whose mask is not 0 (all without a mask):
 /// element i goes to lane i mod 8, the lanes are added in order.
 fn square_sum(g: &[f32], mask: Option<&[f32]>) -> f64 {
-    super::wide::wide(|| match mask {
-        Some(mask) => {
-            let mask = &mask[..g.len()];
-            square_sum_lanes(g, |i| mask[i] != 0.0)
-        }
-        None => square_sum_lanes(g, |_| true),
-    })
+    match mask {
+        Some(mask) => masked_square_sum(g, &mask[..g.len()]),
+        None => full_square_sum(g),
+    }
+}
+
+super::wide::wide_fn!(
+    /// [`square_sum`] of every element, at full vector width.
+    fn full_square_sum(g: &[f32]) -> f64 => full_square_sum_body
+);
+
+#[inline(always)]
+fn full_square_sum_body(g: &[f32]) -> f64 {
+    square_sum_lanes(g, |_| true)
+}
+
+super::wide::wide_fn!(
+    /// [`square_sum`] of the elements whose mask (as long as g) is not 0, at full vector width.
+    fn masked_square_sum(g: &[f32], mask: &[f32]) -> f64 => masked_square_sum_body
+);
+
+#[inline(always)]
+fn masked_square_sum_body(g: &[f32], mask: &[f32]) -> f64 {
+    square_sum_lanes(g, |i| mask[i] != 0.0)
 }
 
 /// [`square_sum`]'s loop over whole chunks of 8 (no bounds check or branch inside, so it is
@@ -120,10 +137,22 @@ struct StepConstants {
     decay: f32,
 }
 
+super::wide::wide_fn!(
+    /// [`adam_elements`] at full vector width.
+    fn adam_step(
+        w: &mut [f32],
+        m: &mut [f32],
+        v: &mut [f32],
+        g: &[f32],
+        mask: Option<&[f32]>,
+        c: StepConstants,
+    ) => adam_elements
+);
+
 /// One Adam step over a parameter's elements in place. A frozen element (mask 0), its moments
 /// included, keeps its bits (METHOD 2.2): its step is computed and discarded, a select rather
-/// than a branch. Inlined into [`super::wide::wide`]'s body, with every constant a local value
-/// and the slices of one length, so the loop compiles to full-width vector code.
+/// than a branch. Inlined into [`adam_step`]'s target-feature functions, with every constant a
+/// local value and the slices of one length, so the loop compiles to full-width vector code.
 #[inline(always)]
 fn adam_elements(w: &mut [f32], m: &mut [f32], v: &mut [f32], g: &[f32], mask: Option<&[f32]>, c: StepConstants) {
     let n = w.len();
@@ -264,8 +293,7 @@ impl MaskedAdam {
                     "{}: update mask differs in size from the parameter",
                     p.name
                 );
-                let (m, v) = (&mut mom.m, &mut mom.v);
-                super::wide::wide(|| adam_elements(&mut w, m, v, g, mask, constants));
+                adam_step(&mut w, &mut mom.m, &mut mom.v, g, mask, constants);
                 Ok(())
             })?
             .transpose()?;
