@@ -95,18 +95,6 @@ fn measure_config(
     Ok(())
 }
 
-/// The process's CPU time so far (user + system, all threads), seconds: fields 14 and 15
-/// of /proc/self/stat in clock ticks (100 a second on Linux). None where that file is missing.
-fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // The command name (field 2) is in parentheses and may hold spaces: count after it.
-    let after_name = &stat[stat.rfind(')')? + 1..];
-    let fields: Vec<&str> = after_name.split_whitespace().collect();
-    // fields[0] is field 3 (the state), so fields 14 and 15 are at 11 and 12.
-    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
-}
-
 /// Adds the `ppo*` keys for every configuration (only those named in `which`, when given).
 pub fn measure(
     seconds: f64,
@@ -120,6 +108,11 @@ pub fn measure(
     }
     report.insert("ppo_threads".into(), json!(rayon::current_num_threads()));
     Ok(())
+}
+
+/// The process's CPU time so far (user + system, all threads), seconds (Linux; None elsewhere).
+fn process_cpu_seconds() -> Option<f64> {
+    super::cpu_seconds("/proc/self/stat")
 }
 
 #[cfg(test)]

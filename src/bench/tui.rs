@@ -122,12 +122,7 @@ impl Observer for Stamps {
 
 /// CPU seconds this thread has used (Linux; None elsewhere).
 fn thread_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
-    // Fields after the command name (which is in parentheses): utime and stime are fields 14 and 15.
-    let rest = &stat[stat.rfind(')')? + 2..];
-    let fields: Vec<&str> = rest.split_whitespace().collect();
-    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
+    super::cpu_seconds("/proc/thread-self/stat")
 }
 
 /// Iterations per second after the first `warm` iterations.
