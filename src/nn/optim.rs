@@ -282,7 +282,7 @@ impl MaskedAdam {
             };
             with_grad_and_mask(p, grads, |g, mask| -> anyhow::Result<()> {
                 anyhow::ensure!(
-                    g.len() == w.len() && mom.m.len() == w.len() && mom.v.len() == w.len(),
+                    g.len() == w.len(),
                     "{}: gradient has {} elements, parameter {}",
                     p.name,
                     g.len(),

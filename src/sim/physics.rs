@@ -189,6 +189,11 @@ impl RobotSim {
 
         let effort: [f32; 12] = std::array::from_fn(|i| robot.joints[i].effort);
         let limits: [[f32; 2]; 12] = std::array::from_fn(|i| [robot.joints[i].lower, robot.joints[i].upper]);
+        let mb = &world.multibody_joints[multibody];
+        let rapier_limits = joint_links.map(|id| {
+            let joint = &mb.link(id).expect("leg link exists").joint;
+            joint.data.limit_axes.contains(JointAxesMask::ANG_X)
+        });
         let mut sim = Self {
             world,
             multibody,
@@ -197,7 +202,7 @@ impl RobotSim {
             foot_offsets: robot.foot_offsets,
             effort,
             limits,
-            rapier_limits: [false; 12],
+            rapier_limits,
             parts,
             ground,
             gains: *gains,
@@ -206,11 +211,6 @@ impl RobotSim {
             last_torques: [0.0; 12],
         };
         sim.init_gains();
-        let mb = sim.mb();
-        sim.rapier_limits = sim.joint_links.map(|id| {
-            let joint = &mb.link(id).expect("leg link exists").joint;
-            joint.data.limit_axes.contains(JointAxesMask::ANG_X)
-        });
         sim.set_pose(height, q0);
         Ok(sim)
     }
