@@ -16,10 +16,11 @@
 //! buffers are made for the (batch, 512) activations.
 
 use super::activation::{contiguous_f32, with_f32_slice};
+use super::product::{matmul, parallelism, product};
 use super::wide::wide;
 use crate::config::net::Activation;
 use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
-use gemm::{gemm, Parallelism};
+use gemm::Parallelism;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
@@ -97,61 +98,21 @@ fn activation_grad_in_place(act: Activation, g: &mut [f32], y: &[f32]) {
     }
 }
 
-fn parallelism() -> Parallelism {
-    match candle_core::utils::get_num_threads() {
-        1 => Parallelism::None,
-        n => Parallelism::Rayon(n),
-    }
-}
-
-/// dst (m, n) row-major = (dst if `keep_dst`) + A B, with A (m, k) and B (k, n) given as
-/// slices with their (column stride, row stride): the product the fused op runs, on
-/// `par` threads (gemm's result does not depend on it). Panics if a view is out of bounds.
-#[allow(clippy::too_many_arguments)]
-pub fn matmul(
-    m: usize,
-    n: usize,
-    k: usize,
-    dst: &mut [f32],
-    keep_dst: bool,
-    a: &[f32],
-    a_cs: usize,
-    a_rs: usize,
-    b: &[f32],
-    b_cs: usize,
-    b_rs: usize,
-    par: Parallelism,
-) {
-    // The last element each view reaches must lie inside its slice.
-    let last = |rows: usize, cols: usize, cs: usize, rs: usize| (rows.max(1) - 1) * rs + (cols.max(1) - 1) * cs;
-    assert!(dst.len() >= m * n, "matmul: dst holds {} of {m} x {n}", dst.len());
-    assert!(m * k == 0 || last(m, k, a_cs, a_rs) < a.len(), "matmul: A ({m} x {k}) out of bounds");
-    assert!(k * n == 0 || last(k, n, b_cs, b_rs) < b.len(), "matmul: B ({k} x {n}) out of bounds");
-    // SAFETY: the asserts above keep the (m, k) and (k, n) views of `a` and `b` in bounds,
-    // and dst is an exclusive (m, n) row-major buffer.
-    unsafe {
-        gemm(
-            m,
-            n,
-            k,
-            dst.as_mut_ptr(),
-            1,
-            n as isize,
-            keep_dst,
-            a.as_ptr(),
-            a_cs as isize,
-            a_rs as isize,
-            b.as_ptr(),
-            b_cs as isize,
-            b_rs as isize,
-            if keep_dst { 1.0 } else { 0.0 },
-            1.0,
-            false,
-            false,
-            false,
-            par,
-        )
-    }
+/// A new (batch, width) row-major matrix whose every row is `bias`, written once
+/// (not zeroed first), rows in parallel.
+fn bias_rows(bias: &[f32], batch: usize) -> Vec<f32> {
+    let width = bias.len();
+    let mut z = Vec::<f32>::with_capacity(batch * width);
+    z.spare_capacity_mut()[..batch * width].par_chunks_mut(width.max(1) * ROW_BLOCK).for_each(|rows| {
+        rows.chunks_mut(width.max(1)).for_each(|row| {
+            row.iter_mut().zip(bias).for_each(|(z, b)| {
+                z.write(*b);
+            })
+        })
+    });
+    // SAFETY: every one of the batch * width elements was written just above.
+    unsafe { z.set_len(batch * width) };
+    z
 }
 
 /// Offsets of each layer's weight and bias in theta.
@@ -196,9 +157,7 @@ impl FusedMlp {
             let (fan_in, width) = (self.sizes[l], self.sizes[l + 1]);
             let h = if l == 0 { x } else { &hidden[l - 1] };
             let bias = &theta[b_at..b_at + width];
-            let mut z = vec![0f32; batch * width];
-            z.par_chunks_mut(width * ROW_BLOCK)
-                .for_each(|rows| rows.chunks_mut(width).for_each(|r| r.copy_from_slice(bias)));
+            let mut z = bias_rows(bias, batch);
             // z (batch, width) += h (batch, fan_in) . W^T, W (width, fan_in) row-major.
             matmul(batch, width, fan_in, &mut z, true, h, 1, fan_in, &theta[w_at..], fan_in, 1, parallelism());
             if l < last {
@@ -343,9 +302,7 @@ impl FusedMlp {
             };
             let previous = |par: Parallelism| {
                 // g_prev (batch, fan_in) = g (batch, width) . W (width, fan_in).
-                let mut prev = vec![0f32; batch * fan_in];
-                matmul(batch, fan_in, width, &mut prev, false, g_now, 1, width, &theta[w_at..], 1, fan_in, par);
-                prev
+                product(batch, fan_in, width, g_now, 1, width, &theta[w_at..], 1, fan_in, par)
             };
             if need_prev {
                 let ((), prev) = rayon::join(|| weight_and_bias(Parallelism::None), || previous(Parallelism::None));
@@ -363,30 +320,6 @@ mod tests {
     use super::super::activation::activate;
     use super::*;
     use candle_core::{Device, Var};
-
-    #[test]
-    fn matrix_products_do_not_depend_on_the_thread_count() {
-        let (m, n, k) = (300, 200, 1000);
-        let a: Vec<f32> = (0..m * k).map(|i| ((i * 7919) % 1000) as f32 / 1000.0 - 0.5).collect();
-        let b: Vec<f32> = (0..k * n).map(|i| ((i * 104729) % 997) as f32 / 997.0 - 0.5).collect();
-        let run = |par: Parallelism| {
-            let mut dst = vec![0f32; m * n];
-            matmul(m, n, k, &mut dst, false, &a, 1, k, &b, 1, n, par);
-            dst.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
-        };
-        let single = run(Parallelism::None);
-        assert!(single == run(Parallelism::Rayon(2)), "2 threads differ from 1");
-        assert!(single == run(Parallelism::Rayon(3)), "3 threads differ from 1");
-    }
-
-    #[test]
-    #[should_panic(expected = "out of bounds")]
-    fn a_matrix_view_beyond_its_slice_is_refused() {
-        let (a, b) = (vec![1f32; 6], vec![1f32; 6]);
-        let mut dst = vec![0f32; 4];
-        // A claims (2, 4) with row stride 4: 8 elements, the slice has 6.
-        matmul(2, 2, 4, &mut dst, false, &a, 1, 4, &b, 1, 2, Parallelism::None);
-    }
 
     #[test]
     fn fast_exp_reads_the_exponent_as_the_float_to_int_cast_did() {
