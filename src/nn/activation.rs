@@ -6,8 +6,9 @@
 //! ELU (alpha = 1): y = x if x > 0 else exp(x) - 1;  dy/dx = 1 if y > 0 else y + 1.
 
 use crate::config::net::Activation;
-use candle_core::{CpuStorage, CustomOp1, CustomOp2, Layout, Shape, Tensor};
+use candle_core::{CpuStorage, CustomOp1, CustomOp2, InplaceOp1, Layout, Shape, Tensor};
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 /// Elements per rayon task: large enough that scheduling is negligible.
 const CHUNK: usize = 1 << 14;
@@ -26,6 +27,40 @@ pub(super) fn with_f32_slice<R>(t: &Tensor, what: &str, f: impl FnOnce(&[f32]) -
     match &*storage {
         candle_core::Storage::Cpu(cpu) => Ok(f(contiguous_f32(cpu, layout, what)?)),
         _ => candle_core::bail!("{what}: expects a tensor on the CPU"),
+    }
+}
+
+/// Runs `f` on the contiguous f32 contents of a CPU tensor in place, without copying
+/// them out and back: the write lands in the tensor's storage, which every tensor
+/// sharing it (a `Var` and its clones) sees, as `Var::set` would.
+pub(super) fn with_f32_slice_mut<R>(t: &Tensor, what: &str, f: impl FnOnce(&mut [f32]) -> R) -> candle_core::Result<R> {
+    let op = InPlace { what, f: Mutex::new(Some(f)), out: Mutex::new(None) };
+    t.inplace_op1(&op)?;
+    let out = op.out.into_inner().map_err(|_| candle_core::Error::Msg(format!("{what}: in-place op poisoned")))?;
+    out.ok_or_else(|| candle_core::Error::Msg(format!("{what}: expects a tensor on the CPU")))
+}
+
+/// The candle op behind [`with_f32_slice_mut`]: hands the storage to `f` once.
+struct InPlace<'a, F, R> {
+    what: &'a str,
+    f: Mutex<Option<F>>,
+    out: Mutex<Option<R>>,
+}
+
+impl<F: FnOnce(&mut [f32]) -> R, R> InplaceOp1 for InPlace<'_, F, R> {
+    fn name(&self) -> &'static str {
+        "f32-in-place"
+    }
+
+    fn cpu_fwd(&self, s: &mut CpuStorage, l: &Layout) -> candle_core::Result<()> {
+        let what = self.what;
+        let CpuStorage::F32(data) = s else { candle_core::bail!("{what}: expects an f32 tensor") };
+        let Some((a, b)) = l.contiguous_offsets() else { candle_core::bail!("{what}: expects a contiguous tensor") };
+        let poisoned = || candle_core::Error::Msg(format!("{what}: in-place op poisoned"));
+        let f = self.f.lock().map_err(|_| poisoned())?.take();
+        let Some(f) = f else { candle_core::bail!("{what}: in-place op run twice") };
+        *self.out.lock().map_err(|_| poisoned())? = Some(f(&mut data[a..b]));
+        Ok(())
     }
 }
 
@@ -95,6 +130,32 @@ pub fn activate(activation: Activation, x: &Tensor) -> candle_core::Result<Tenso
 mod tests {
     use super::*;
     use candle_core::{Device, Var};
+
+    #[test]
+    fn a_write_in_place_is_seen_by_the_var_and_its_clones() {
+        let var = Var::from_slice(&[1f32, 2.0, 3.0, 4.0, 5.0, 6.0], (2, 3), &Device::Cpu).unwrap();
+        let clone = var.clone();
+        let sum = with_f32_slice_mut(var.as_tensor(), "w", |w| {
+            w.iter_mut().for_each(|v| *v *= 10.0);
+            w.iter().sum::<f32>()
+        })
+        .unwrap();
+        assert_eq!(sum, 210.0);
+        assert_eq!(
+            clone.as_tensor().flatten_all().unwrap().to_vec1::<f32>().unwrap(),
+            [10.0, 20.0, 30.0, 40.0, 50.0, 60.0]
+        );
+    }
+
+    #[test]
+    fn a_write_in_place_refuses_a_strided_view_and_names_it() {
+        let t = Tensor::from_slice(&[1f32, 2.0, 3.0, 4.0, 5.0, 6.0], (2, 3), &Device::Cpu).unwrap().t().unwrap();
+        let err = with_f32_slice_mut(&t, "actor.l0.weight", |_| ()).unwrap_err().to_string();
+        assert!(err.contains("actor.l0.weight") && err.contains("contiguous"), "{err}");
+        let ints = Tensor::from_slice(&[1u32, 2], 2, &Device::Cpu).unwrap();
+        let err = with_f32_slice_mut(&ints, "step", |_| ()).unwrap_err().to_string();
+        assert!(err.contains("step") && err.contains("f32"), "{err}");
+    }
 
     #[test]
     fn fused_elu_matches_the_formula_and_its_gradient() {

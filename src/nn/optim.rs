@@ -7,11 +7,9 @@
 //! The update is element-wise (rayon over parameters), so the result does not
 //! depend on the number of threads.
 
-use super::activation::with_f32_slice;
-use super::masked::var_values;
+use super::activation::{with_f32_slice, with_f32_slice_mut};
 use super::Param;
 use candle_core::backprop::GradStore;
-use candle_core::Tensor;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -269,7 +267,6 @@ impl MaskedAdam {
             .filter_map(|p| by_name.remove(p.name.as_str()).map(|m| (p, m)))
             .collect();
         work.into_par_iter().try_for_each(|(p, mom)| -> anyhow::Result<()> {
-            let mut w = var_values(&p.var)?;
             mom.step += 1;
             let lr = p.fixed_learning_rate.unwrap_or(c.learning_rate);
             let constants = StepConstants {
@@ -280,25 +277,27 @@ impl MaskedAdam {
                 eps: c.eps as f32,
                 decay: (lr * c.weight_decay) as f32,
             };
-            with_grad_and_mask(p, grads, |g, mask| -> anyhow::Result<()> {
-                anyhow::ensure!(
-                    g.len() == w.len(),
-                    "{}: gradient has {} elements, parameter {}",
-                    p.name,
-                    g.len(),
-                    w.len()
-                );
-                anyhow::ensure!(
-                    mask.is_none_or(|m| m.len() == w.len()),
-                    "{}: update mask differs in size from the parameter",
-                    p.name
-                );
-                adam_step(&mut w, &mut mom.m, &mut mom.v, g, mask, constants);
-                Ok(())
+            // The parameter is stepped in its own storage (no copy out and back).
+            with_grad_and_mask(p, grads, |g, mask| {
+                with_f32_slice_mut(p.var.as_tensor(), &p.name, |w| -> anyhow::Result<()> {
+                    anyhow::ensure!(
+                        g.len() == w.len(),
+                        "{}: gradient has {} elements, parameter {}",
+                        p.name,
+                        g.len(),
+                        w.len()
+                    );
+                    anyhow::ensure!(
+                        mask.is_none_or(|m| m.len() == w.len()),
+                        "{}: update mask differs in size from the parameter",
+                        p.name
+                    );
+                    adam_step(w, &mut mom.m, &mut mom.v, g, mask, constants);
+                    Ok(())
+                })
             })?
+            .transpose()?
             .transpose()?;
-            let shape = p.var.as_tensor().dims().to_vec();
-            p.var.set(&Tensor::from_vec(w, shape, p.var.device())?)?;
             Ok(())
         })
     }
@@ -306,7 +305,9 @@ impl MaskedAdam {
 
 #[cfg(test)]
 mod tests {
+    use super::super::masked::var_values;
     use super::*;
+    use candle_core::Tensor;
     use candle_core::{Device, Var};
 
     #[test]
