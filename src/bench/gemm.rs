@@ -1,5 +1,5 @@
 //! Matrix-product rates for `quadcl bench`: GFLOP/s of the `gemm` kernel the
-//! fused MLP op calls (`nn::matmul`), on the products one PPO minibatch of the base config
+//! fused MLP op calls (`nn::MatrixProduct`), on the products one PPO minibatch of the base config
 //! really has (batch 1536 = 3072 transitions / 2 minibatches; the actor's
 //! 64 -> 512 -> 256 -> 128 -> 12 layers), with the fused op's operand layouts:
 //! forward z = h W^T, backward dW = g^T h and g_prev = g W. Plus the
@@ -11,7 +11,7 @@
 //! (`avx512` when the CPU has AVX-512F, which gemm's `x86-v4` kernels use).
 
 use gemm::Parallelism;
-use quadcl::nn::matmul;
+use quadcl::nn::MatrixProduct;
 use serde_json::json;
 use std::time::Instant;
 
@@ -62,7 +62,8 @@ fn rate(p: &Product, seconds: f64, par: Parallelism) -> f64 {
     let a: Vec<f32> = (0..p.m * p.k).map(|i| ((i * 7919) % 1000) as f32 / 1000.0 - 0.5).collect();
     let b: Vec<f32> = (0..p.k * p.n).map(|i| ((i * 104_729) % 997) as f32 / 997.0 - 0.5).collect();
     let mut dst = vec![0f32; p.m * p.n];
-    let mut run = || matmul(p.m, p.n, p.k, &mut dst, false, &a, p.a.0, p.a.1, &b, p.b.0, p.b.1, par);
+    let product = MatrixProduct::new((p.m, p.n, p.k), &a, p.a, &b, p.b);
+    let mut run = || product.write_to(&mut dst, par);
     run();
     let (start, mut count) = (Instant::now(), 0usize);
     while count < 5 || start.elapsed().as_secs_f64() < seconds {

@@ -16,7 +16,7 @@
 //! buffers are made for the (batch, 512) activations.
 
 use super::activation::{contiguous_f32, with_f32_slice};
-use super::product::{matmul, parallelism, product};
+use super::product::{parallelism, MatrixProduct};
 use super::wide::wide;
 use crate::config::net::Activation;
 use candle_core::{CpuStorage, CustomOp2, Layout, Shape, Tensor};
@@ -159,7 +159,8 @@ impl FusedMlp {
             let bias = &theta[b_at..b_at + width];
             let mut z = bias_rows(bias, batch);
             // z (batch, width) += h (batch, fan_in) . W^T, W (width, fan_in) row-major.
-            matmul(batch, width, fan_in, &mut z, true, h, 1, fan_in, &theta[w_at..], fan_in, 1, parallelism());
+            MatrixProduct::new((batch, width, fan_in), h, (1, fan_in), &theta[w_at..], (fan_in, 1))
+                .add_to(&mut z, parallelism());
             if l < last {
                 activate_in_place(self.activation, &mut z);
                 hidden.push(z);
@@ -292,7 +293,7 @@ impl FusedMlp {
             // one thread when both run, so small layers keep both cores busy.
             let mut weight_and_bias = |par: Parallelism| {
                 // dW (width, fan_in) = g^T (width, batch) . h (batch, fan_in).
-                matmul(width, fan_in, batch, dw, false, g_now, width, 1, h, 1, fan_in, par);
+                MatrixProduct::new((width, fan_in, batch), g_now, (width, 1), h, (1, fan_in)).write_to(dw, par);
                 // db: column sums of g over fixed row blocks, added in block order.
                 for rows in g_now.chunks(width * ROW_BLOCK) {
                     let mut s = vec![0f32; width];
@@ -302,7 +303,8 @@ impl FusedMlp {
             };
             let previous = |par: Parallelism| {
                 // g_prev (batch, fan_in) = g (batch, width) . W (width, fan_in).
-                product(batch, fan_in, width, g_now, 1, width, &theta[w_at..], 1, fan_in, par)
+                MatrixProduct::new((batch, fan_in, width), g_now, (1, width), &theta[w_at..], (1, fan_in))
+                    .to_matrix(par)
             };
             if need_prev {
                 let ((), prev) = rayon::join(|| weight_and_bias(Parallelism::None), || previous(Parallelism::None));

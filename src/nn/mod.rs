@@ -46,7 +46,7 @@ pub use masked::{LayerIteration, MaskedLinear};
 pub use mlp::{FrozenWeights, MaskedMlp};
 pub use network::{AsNetworkRef, IterationNoise, Network, NetworkRef};
 pub use optim::{AdamConfig, MaskedAdam, Moments};
-pub use product::matmul;
+pub use product::MatrixProduct;
 pub use select::row_quota;
 pub use state::{ElementState, IllegalTransition, TaskId};
 pub use stats::{mask_report, LayerMasks, MaskReport, NetworkMasks, TaskMask};
