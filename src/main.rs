@@ -27,12 +27,12 @@ fn keep_candle_kernels_on_the_calling_thread() {
 /// activations and gradients, hundreds of KB to MB each). glibc serves a block
 /// above its mmap threshold by a fresh mmap, and trims the top of a heap above
 /// 128 KB back to the kernel on free, so the next minibatch faults the pages in
-/// again, zeroed, and munmap shoots down the other core's TLB: 165,000-307,000
-/// page faults and 1.0-1.4 s of system time in 12 iterations of the base config
+/// again, zeroed, and munmap shoots down the other core's TLB: 165,000-470,000
+/// page faults and 1.0-4.1 s of system time in 12 iterations of the base config
 /// (`perf stat -e page-faults`). With the mmap threshold at glibc's 64-bit
 /// ceiling (32 MiB) and trimming only above 512 MiB, freed blocks are reused:
-/// 38,000 faults, 0.6 s of system time, 16 MB more peak memory (151 -> 167 MB).
-/// The numbers trained do not change. Either value set by the user
+/// 38,000-39,000 faults and 0.5-0.7 s of system time, for a peak memory 2-10 MB
+/// higher (60 iterations: 172 -> 174 MB). The numbers trained do not change. Either value set by the user
 /// (`MALLOC_MMAP_THRESHOLD_`, `MALLOC_TRIM_THRESHOLD_`) is kept.
 fn reuse_freed_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
