@@ -290,7 +290,7 @@ impl MaskedAdam {
                 decay: (lr * c.weight_decay) as f32,
             };
             // The parameter is stepped in its own storage (no copy out and back).
-            with_grad_and_mask(p, grads, |g, mask| {
+            let stepped = with_grad_and_mask(p, grads, |g, mask| {
                 with_f32_slice_mut(p.var.as_tensor(), &p.name, |w| -> anyhow::Result<()> {
                     anyhow::ensure!(
                         g.len() == w.len(),
@@ -307,9 +307,11 @@ impl MaskedAdam {
                     adam_step(w, &mut mom.m, &mut mom.v, g, mask, constants);
                     Ok(())
                 })
-            })?
-            .transpose()?
-            .transpose()?;
+            })?;
+            // None: no gradient. Otherwise the in-place op's error, then the step's own.
+            if let Some(stepped) = stepped {
+                stepped??;
+            }
             Ok(())
         })
     }
