@@ -42,8 +42,8 @@ impl<'a> MatrixProduct<'a> {
     ) -> Self {
         // The last element each view reaches must lie inside its slice.
         let last = |rows: usize, cols: usize, (cs, rs): (usize, usize)| (rows.max(1) - 1) * rs + (cols.max(1) - 1) * cs;
-        assert!(m * k == 0 || last(m, k, a_strides) < a.len(), "matmul: A ({m} x {k}) out of bounds");
-        assert!(k * n == 0 || last(k, n, b_strides) < b.len(), "matmul: B ({k} x {n}) out of bounds");
+        assert!(m * k == 0 || last(m, k, a_strides) < a.len(), "MatrixProduct: A ({m} x {k}) out of bounds");
+        assert!(k * n == 0 || last(k, n, b_strides) < b.len(), "MatrixProduct: B ({k} x {n}) out of bounds");
         Self { m, n, k, a, a_strides, b, b_strides }
     }
 
@@ -77,7 +77,7 @@ impl<'a> MatrixProduct<'a> {
 
     fn gemm_to_slice(&self, dst: &mut [f32], keep_dst: bool, par: Parallelism) {
         let (m, n) = (self.m, self.n);
-        assert!(dst.len() >= m * n, "matmul: dst holds {} of {m} x {n}", dst.len());
+        assert!(dst.len() >= m * n, "MatrixProduct: dst holds {} of {m} x {n}", dst.len());
         // SAFETY: dst is an exclusive slice of at least m * n elements; `new` checked the views.
         unsafe { self.gemm_into(dst.as_mut_ptr(), keep_dst, par) }
     }
