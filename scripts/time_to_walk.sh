@@ -3,8 +3,9 @@
 # base from scratch. Trains CONFIG in segments (to FIRST iterations, then STEP
 # more at a time, each segment resumed exactly from the last one's checkpoint,
 # so the run is the same bit for bit as one that never stopped), evaluates each
-# segment's checkpoint over 128 episodes (seed 0, pushes on, scored as if the
-# task ended there) and prints a row per evaluation: iteration, the training's
+# segment's checkpoint over 128 episodes (seed 0, scored as if the task ended
+# there, under the default env's pushes whatever CONFIG trains with: a push of
+# up to 1 m/s every 15 s) and prints a row per evaluation: iteration, the training's
 # own wall-clock to it (metrics.jsonl's time/wall_s: evaluations, process starts
 # and resume replays are not counted), fall rate, lin_vel_err, ang_vel_err,
 # return. It stops at the first evaluation that meets fall <= FALL and
@@ -13,17 +14,19 @@
 #   scripts/time_to_walk.sh CONFIG OUT [FIRST=1000] [STEP=100] [MAX=3000]
 #
 # Environment: QUADCL (the binary; default target/release/quadcl, built if
-# missing), FALL, LIN, EPISODES (128). OUT must not exist yet; it keeps
+# missing), FALL, LIN, EPISODES (128), EVAL_PUSH_INTERVAL_S (15) and
+# EVAL_PUSH_MAX_VEL (1.0). OUT must not exist yet; it keeps
 # every evaluated checkpoint under OUT/kept/ITERATION and the table in
 # OUT/time_to_walk.tsv. A run of the base config takes 20-25 min on 2 cores.
 set -euo pipefail
 
 if [[ $# -lt 2 ]]; then
-    sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'
+    sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'
     exit 2
 fi
 config=$1 out=$2 first=${3:-1000} step=${4:-100} max=${5:-3000}
 fall=${FALL:-0.05} lin=${LIN:-0.25} episodes=${EPISODES:-128}
+push_interval=${EVAL_PUSH_INTERVAL_S:-15} push_max_vel=${EVAL_PUSH_MAX_VEL:-1.0}
 for n in "$first" "$step" "$max" "$episodes"; do
     [[ $n =~ ^[1-9][0-9]*$ ]] || { echo "time_to_walk: '$n' is not a positive whole number" >&2; exit 2; }
 done
@@ -55,7 +58,8 @@ while :; do
         > "$out/train.log" 2>&1 || { tail -5 "$out/train.log" >&2; exit 1; }
     resume=(--resume)
     cp -r "$out/run/checkpoint" "$out/kept/$target"
-    "$bin" eval --policy "$out/kept/$target" --task none --episodes "$episodes" --json > "$out/kept/$target/eval.json"
+    "$bin" eval --policy "$out/kept/$target" --task none --episodes "$episodes" \
+        --push-interval-s "$push_interval" --push-max-vel "$push_max_vel" --json > "$out/kept/$target/eval.json"
     row=$(python3 - "$out/run/metrics.jsonl" "$target" "$out/kept/$target/eval.json" "$fall" "$lin" <<'PY'
 import json, sys
 rows = [json.loads(line) for line in open(sys.argv[1])]

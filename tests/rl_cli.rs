@@ -90,6 +90,42 @@ fn eval_of_a_training_checkpoint_equals_the_policy_its_task_ends_with() {
 }
 
 #[test]
+fn eval_push_flags_replace_the_training_pushes() {
+    // The same policy scored without pushes, with the interval set to 0, and under
+    // pushes far past what any robot recovers from (8 m/s every 0.5 s).
+    let (_dir, out) = train_tiny();
+    let eval = |extra: &[&str]| {
+        let output = quadcl()
+            .args(["eval", "--policy"])
+            .arg(out.join("policy"))
+            .args(["--episodes", "2", "--seed", "4", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&output.stderr));
+        serde_json::from_slice::<serde_json::Value>(&output.stdout).unwrap()
+    };
+    let calm = eval(&["--no-pushes"]);
+    assert_eq!(eval(&["--push-interval-s", "0"]), calm);
+    let shoved = eval(&["--push-interval-s", "0.5", "--push-max-vel", "8"]);
+    assert_eq!(shoved["fall_rate"], 1.0, "{shoved}");
+    let (calm_s, shoved_s) = (calm["survival_s"].as_f64().unwrap(), shoved["survival_s"].as_f64().unwrap());
+    assert!(shoved_s < calm_s, "survival {shoved_s} s under pushes against {calm_s} s without");
+
+    for (flag, value) in [("--push-interval-s", "-1"), ("--push-max-vel", "NaN")] {
+        let output = quadcl()
+            .args(["eval", "--policy"])
+            .arg(out.join("policy"))
+            .arg(format!("{flag}={value}"))
+            .output()
+            .unwrap();
+        assert!(!output.status.success());
+        let err = String::from_utf8_lossy(&output.stderr);
+        assert!(err.contains(flag) && err.contains(value), "{err}");
+    }
+}
+
+#[test]
 fn gait_reports_the_contact_pattern_of_a_held_command() {
     let (_dir, out) = train_tiny();
     let output = quadcl()

@@ -2,7 +2,9 @@
 //! one episode per environment with the deterministic policy, random
 //! commands from the env config (vx in [-1, 1] m/s, wz in [-pi/2, pi/2] rad/s
 //! by default) and the training config's randomisation and pushes (`--no-pushes`
-//! turns the pushes off); prints mean return, tracking errors, fall rate, survival.
+//! turns the pushes off; `--push-interval-s` and `--push-max-vel` set another
+//! push regime, e.g. to score policies trained under different pushes on the
+//! same test); prints mean return, tracking errors, fall rate, survival.
 
 use clap::Args;
 use quadcl::rl::SimTrainEnv;
@@ -26,8 +28,16 @@ pub struct EvalArgs {
     pub seed: u64,
     /// Evaluate without the training pushes (by default the env config's pushes stay on,
     /// so a fall rate includes push recovery; this separates tracking from it).
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["push_interval_s", "push_max_vel"])]
     pub no_pushes: bool,
+    /// Seconds between pushes instead of the training config's `env.push_interval_s`
+    /// (0 turns them off).
+    #[arg(long, value_name = "S")]
+    pub push_interval_s: Option<f32>,
+    /// Largest push (a change of the trunk's horizontal velocity, m/s, uniform per axis)
+    /// instead of the training config's `env.push_max_vel`.
+    #[arg(long, value_name = "M_PER_S")]
+    pub push_max_vel: Option<f32>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -44,6 +54,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     if args.no_pushes {
         env_cfg.push_interval_s = 0.0;
     }
+    if let Some(s) = args.push_interval_s {
+        check_push("--push-interval-s", s)?;
+        env_cfg.push_interval_s = s;
+    }
+    if let Some(v) = args.push_max_vel {
+        check_push("--push-max-vel", v)?;
+        env_cfg.push_max_vel = v;
+    }
     let env_cfg = &env_cfg;
     let mut env = SimTrainEnv::new(env_cfg, &task, args.episodes, args.seed)?;
     // An episode lasts at most `episode_s`; allow a margin.
@@ -58,4 +76,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A push setting from the command line: finite and not negative.
+fn check_push(flag: &str, value: f32) -> anyhow::Result<()> {
+    quadcl::config::bounds::check(flag, value, quadcl::config::bounds::NON_NEGATIVE)
 }
