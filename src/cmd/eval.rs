@@ -7,6 +7,7 @@
 //! same test); prints mean return, tracking errors, fall rate, survival.
 
 use clap::Args;
+use quadcl::config::bounds::{self, NON_NEGATIVE};
 use quadcl::rl::SimTrainEnv;
 use quadcl::sim::Perturbation;
 use std::path::PathBuf;
@@ -55,11 +56,11 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         env_cfg.push_interval_s = 0.0;
     }
     if let Some(s) = args.push_interval_s {
-        check_push("--push-interval-s", s)?;
+        bounds::check("--push-interval-s", s, NON_NEGATIVE)?;
         env_cfg.push_interval_s = s;
     }
     if let Some(v) = args.push_max_vel {
-        check_push("--push-max-vel", v)?;
+        bounds::check("--push-max-vel", v, NON_NEGATIVE)?;
         env_cfg.push_max_vel = v;
     }
     let env_cfg = &env_cfg;
@@ -76,9 +77,4 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// A push setting from the command line: finite and not negative.
-fn check_push(flag: &str, value: f32) -> anyhow::Result<()> {
-    quadcl::config::bounds::check(flag, value, quadcl::config::bounds::NON_NEGATIVE)
 }
