@@ -39,7 +39,7 @@ fn a_run_writes_every_metrics_field_checkpoints_and_a_log() {
     assert_eq!(json["eval_matrix"]["rows"].as_array().unwrap().len(), 3);
     assert_eq!(json["curves"][1]["performance"].as_array().unwrap().len(), 7);
     assert!(json["command_tracking"]["lin_vel_err"][0].is_f64());
-    assert_eq!(json["steps"][2]["switches"]["reinit"], false);
+    assert_eq!(json["steps"][2]["switches"]["reinit_weights"], false);
     for (step, task) in [(0, "crash_FL"), (1, "invert_RR"), (2, "noise_FR")] {
         assert!(out.join(format!("checkpoints/step-{step:02}-{task}/manifest.json")).exists());
     }

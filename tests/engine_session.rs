@@ -56,7 +56,7 @@ fn switch_changes_apply_to_the_next_task_only() {
     s.add_observer(Box::new(log.clone()));
     s.step_iteration().unwrap(); // task 0 in progress
     let change = SwitchOverrides {
-        reinit: Some(false),
+        reinit_weights: Some(false),
         lambda: Some(LambdaMode::Free),
         capacity: Some(0.3),
         ..Default::default()
@@ -69,7 +69,7 @@ fn switch_changes_apply_to_the_next_task_only() {
     assert_eq!(steps[0].switches.as_ref(), Some(&default), "the task in progress kept its switches");
     assert_eq!(
         steps[1].switches,
-        Some(Switches { reinit: false, lambda: LambdaMode::Free, capacity: 0.3, ..default.clone() })
+        Some(Switches { reinit_weights: false, lambda: LambdaMode::Free, capacity: 0.3, ..default.clone() })
     );
     assert_eq!(steps[2].switches.as_ref(), Some(&default), "the change was for one task");
     let started: Vec<f64> = log

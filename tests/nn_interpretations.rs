@@ -7,7 +7,7 @@
 
 mod nn_common;
 use nn_common::train_steps;
-use quadcl::nn::{Activation, BiasStart, ElementState, EntropyTarget, MaskConfig, MaskedMlp};
+use quadcl::nn::{Activation, BiasStart, ElementState, EntropyTarget, MaskConfig, MaskedMlp, ScoreReinit};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -33,7 +33,12 @@ fn first_task(cfg: &MaskConfig) -> MaskedMlp {
 #[test]
 fn without_the_occupied_score_gradient_only_vacant_scores_train() {
     for occupied_too in [true, false] {
-        let cfg = MaskConfig { score_grad_occupied: occupied_too, reinit: false, ..MaskConfig::default() };
+        let cfg = MaskConfig {
+            score_grad_occupied: occupied_too,
+            reinit_weights: false,
+            reinit_scores: ScoreReinit::None,
+            ..MaskConfig::default()
+        };
         let mut net = first_task(&cfg);
         start(&mut net, 1, &[], &cfg);
         let before: Vec<Vec<f32>> = net.layers().iter().map(|l| l.score_values().unwrap()).collect();

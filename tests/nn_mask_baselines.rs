@@ -6,7 +6,7 @@
 mod nn_common;
 use candle_core::Tensor;
 use nn_common::{input, train_steps};
-use quadcl::nn::{Activation, ElementState, MaskConfig, MaskedMlp, SelectionRule};
+use quadcl::nn::{Activation, ElementState, MaskConfig, MaskedMlp, ScoreReinit, SelectionRule};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -33,7 +33,8 @@ fn packnet_keeps_the_largest_fresh_weights_freezes_them_and_recalls_without_late
         rule: SelectionRule::PackNet,
         capacity: 1.0,
         private_share: 0.0,
-        reinit: false,
+        reinit_weights: false,
+        reinit_scores: ScoreReinit::None,
         entropy: false,
         entropy_iterations: 0,
         packnet_keep: 0.5,
@@ -85,7 +86,8 @@ fn piggyback_moves_no_weight_masks_only_the_base_and_recalls_exactly() {
     let cfg = MaskConfig {
         rule: SelectionRule::Piggyback,
         private_share: 0.0,
-        reinit: false,
+        reinit_weights: false,
+        reinit_scores: ScoreReinit::None,
         entropy: false,
         entropy_iterations: 0,
         ..MaskConfig::default()

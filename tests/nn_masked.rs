@@ -5,7 +5,7 @@
 mod nn_common;
 use candle_core::Tensor;
 use nn_common::*;
-use quadcl::nn::{AdamConfig, ElementState, MaskConfig, MaskedAdam, MaskedMlp, SigmaScale};
+use quadcl::nn::{AdamConfig, BiasStart, ElementState, MaskConfig, MaskedAdam, MaskedMlp, SigmaScale};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -364,13 +364,14 @@ fn in_score_gap_units_the_churn_follows_sigma_not_the_scores_spread() {
 }
 
 #[test]
-fn a_new_task_starts_from_the_mean_bias_of_its_related_tasks() {
-    let (mut net, _) = net_after(2, &MaskConfig::default());
+fn under_a_related_bias_start_a_new_task_starts_from_the_mean_bias_of_its_related_tasks() {
+    let cfg = MaskConfig { bias_start: BiasStart::Related, ..MaskConfig::default() };
+    let (mut net, _) = net_after(2, &cfg);
     let start_bias = |net: &mut MaskedMlp, related: &[usize]| -> Vec<Vec<f32>> {
         net.begin_task(2, related).unwrap();
         let b = net.layers().iter().map(|l| l.training_bias().unwrap().unwrap()).collect();
         // Back to between tasks without ending task 2.
-        *net = net_after(2, &MaskConfig::default()).0;
+        *net = net_after(2, &cfg).0;
         b
     };
     for (layer, bias) in start_bias(&mut net, &[]).iter().enumerate() {

@@ -1,17 +1,18 @@
 //! Exact recall (METHOD.md 2.4, 2.5, 2.7): after every task of a ten-task
 //! sequence, every earlier task's outputs are bit-identical to what they were
-//! when that task ended; with re-initialisation on and off, and with a
-//! private fine-tuning of one finished task in between.
+//! when that task ended; with re-initialisation on (the soft scores of vacant
+//! elements or all of them redrawn) and off, and with a private fine-tuning of
+//! one finished task in between.
 
 mod nn_common;
 use nn_common::*;
-use quadcl::nn::MaskConfig;
+use quadcl::nn::{MaskConfig, ScoreReinit};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 
-fn check_recall(reinit: bool, fine_tune_after: Option<(usize, usize)>) {
-    let cfg = MaskConfig { reinit, ..MaskConfig::default() };
+fn check_recall(reinit: bool, scores: ScoreReinit, fine_tune_after: Option<(usize, usize)>) {
+    let cfg = MaskConfig { reinit_weights: reinit, reinit_scores: scores, ..MaskConfig::default() };
     let ts = tasks(10, 7);
     let mut net = small_mlp(&cfg, 7);
     let mut rng = ChaCha8Rng::seed_from_u64(8);
@@ -40,17 +41,22 @@ fn check_recall(reinit: bool, fine_tune_after: Option<(usize, usize)>) {
 
 #[test]
 fn recall_is_bit_identical_after_ten_tasks_with_reinit() {
-    check_recall(true, None);
+    check_recall(true, ScoreReinit::Vacant, None);
+}
+
+#[test]
+fn recall_is_bit_identical_after_ten_tasks_with_every_score_redrawn() {
+    check_recall(true, ScoreReinit::All, None);
 }
 
 #[test]
 fn recall_is_bit_identical_after_ten_tasks_without_reinit() {
-    check_recall(false, None);
+    check_recall(false, ScoreReinit::None, None);
 }
 
 #[test]
 fn private_fine_tuning_changes_only_its_own_task() {
-    check_recall(true, Some((5, 2)));
+    check_recall(true, ScoreReinit::Vacant, Some((5, 2)));
 }
 
 #[test]

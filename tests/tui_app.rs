@@ -5,6 +5,7 @@
 mod tui_common;
 use quadcl::cl::SwitchOverrides;
 use quadcl::engine::Command;
+use quadcl::nn::ScoreReinit;
 use quadcl::tui::{Action, Outgoing, Panel, Screen};
 use tui_common::{act, open_toy, pump, screen};
 
@@ -137,24 +138,35 @@ fn next_task_controls_queue_switches_and_transfer_and_typed_tasks() {
     let tmp = tempfile::tempdir().unwrap();
     let (mut app, mut worker) = open_toy(tmp.path(), (120, 40));
     app.update(Action::Show(Screen::NextTask));
-    // Row 3 is the capacity: one step up.
-    for _ in 0..3 {
+    // Row 6 is the capacity: one step up.
+    for _ in 0..6 {
         app.update(Action::ControlDown);
     }
     let before = app.next.pending(app.switches().unwrap()).capacity;
     act(&mut app, &mut worker, Action::ControlChange(1), |a| a.next.queued.capacity.is_some());
     assert!((app.next.pending(app.switches().unwrap()).capacity - (before + 0.01)).abs() < 1e-9);
-    // Reinit off.
-    for _ in 0..3 {
+    // Re-initialisation of weights off, then the scores' reading one step on (vacant -> all).
+    for _ in 0..6 {
         app.update(Action::ControlUp);
     }
-    act(&mut app, &mut worker, Action::ControlChange(0), |a| a.next.queued.reinit == Some(false));
+    act(&mut app, &mut worker, Action::ControlChange(0), |a| a.next.queued.reinit_weights == Some(false));
+    app.update(Action::ControlDown);
+    act(&mut app, &mut worker, Action::ControlChange(1), |a| a.next.queued.reinit_scores.is_some());
+    app.update(Action::ControlUp);
     let capacity = Some(((before + 0.01) * 100.0).round() / 100.0);
-    assert_eq!(app.next.queued, SwitchOverrides { reinit: Some(false), capacity, ..Default::default() });
+    assert_eq!(
+        app.next.queued,
+        SwitchOverrides {
+            reinit_weights: Some(false),
+            reinit_scores: Some(ScoreReinit::All),
+            capacity,
+            ..Default::default()
+        }
+    );
 
     // Nothing learned yet: no related task to pick; the mode cycles.
     assert!(app.next.learned.is_empty());
-    for _ in 0..5 {
+    for _ in 0..8 {
         app.update(Action::ControlDown);
     }
     app.update(Action::ControlChange(1));

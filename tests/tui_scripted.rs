@@ -29,7 +29,7 @@ fn a_scripted_session_starts_a_task_changes_a_switch_composes_a_related_task_and
     // Capacity of the first step: 0.20 -> 0.21.
     app.update(Action::Show(Screen::NextTask));
     app.update(Action::FocusNext);
-    for _ in 0..3 {
+    for _ in 0..6 {
         app.update(Action::ControlDown);
     }
     act(&mut app, &mut worker, Action::ControlChange(1), |a| a.next.queued.capacity.is_some());
@@ -43,9 +43,9 @@ fn a_scripted_session_starts_a_task_changes_a_switch_composes_a_related_task_and
     // Step 1 names step 0's task as related; the preview comes from the engine.
     app.update(Action::Show(Screen::NextTask));
     app.update(Action::FocusNext);
-    (0..10).for_each(|_| app.update(Action::ControlUp));
-    (0..6).for_each(|_| app.update(Action::ControlDown));
-    assert_eq!(app.next.cursor, 6, "the first related task (the switches, then the mode)");
+    (0..20).for_each(|_| app.update(Action::ControlUp));
+    (0..9).for_each(|_| app.update(Action::ControlDown));
+    assert_eq!(app.next.cursor, 9, "the first related task (the switches, then the mode)");
     act(&mut app, &mut worker, Action::ControlChange(0), |a| {
         a.next.preview.as_ref().is_some_and(|p| p.related == ["crash:FL".to_string()] && p.lifted_from == p.related)
     });

@@ -1,12 +1,14 @@
 //! The method `ours` (METHOD.md 2.1 to 2.7) and every switch of the paper's
-//! ablations: re-initialisation on/off, entropy on/off (the paper's None /
-//! Reinit / Reinit & Entropy), the lambda mode of the selection (a vacant
-//! share such as 0.25, `free`, `vacant`, `per-layer`), capacity c and
-//! private share p. The switches only translate into the masked networks'
+//! ablations: re-initialisation of vacant weights on/off and of the soft scores
+//! (vacant / all / none), entropy on/off (the paper's None / Reinit / Reinit &
+//! Entropy, and its scores-only scheme), the range fresh weights are drawn from,
+//! where a new task's bias starts, the lambda mode of the selection (a vacant
+//! share such as 0.25, `free`, `vacant`, `per-layer`), capacity c and private
+//! share p. The switches only translate into the masked networks'
 //! [`MaskConfig`]; the mechanics live in `nn`.
 
 use super::method::ContinualMethod;
-use crate::config::net::{MaskConfig, SelectionRule};
+use crate::config::net::{BiasStart, MaskConfig, ReinitRange, ScoreReinit, SelectionRule};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::str::FromStr;
@@ -79,8 +81,16 @@ impl<'de> Deserialize<'de> for LambdaMode {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Switches {
-    /// Re-initialise vacant weights and redraw soft-score means when the task ends (METHOD.md 2.4).
-    pub reinit: bool,
+    /// Re-initialise the weights still vacant when the task ends (METHOD.md 2.4 step 4); `reinit`
+    /// in files written before issue 31.
+    #[serde(alias = "reinit")]
+    pub reinit_weights: bool,
+    /// Which soft-score means are redrawn when the task ends: `vacant` (the default), `all`, `none`.
+    pub reinit_scores: ScoreReinit,
+    /// The range fresh vacant weights are drawn from: `initial` (the default) or `he_effective`.
+    pub reinit_range: ReinitRange,
+    /// Where the task's bias starts: `previous` (the default), `related` or `zero`.
+    pub bias_start: BiasStart,
     /// The soft scores' entropy term during the first E iterations (METHOD.md 2.3).
     pub entropy: bool,
     /// The selection rule: a vacant share ("0.25"), "free", "vacant" or "per-layer".
@@ -108,13 +118,25 @@ impl Switches {
             // Set by their methods only, never a run's switches ([net] refuses them).
             SelectionRule::PackNet | SelectionRule::Piggyback => LambdaMode::Free,
         };
-        Self { reinit: m.reinit, entropy: m.entropy, lambda, capacity: m.capacity, private_share: m.private_share }
+        Self {
+            reinit_weights: m.reinit_weights,
+            reinit_scores: m.reinit_scores,
+            reinit_range: m.reinit_range,
+            bias_start: m.bias_start,
+            entropy: m.entropy,
+            lambda,
+            capacity: m.capacity,
+            private_share: m.private_share,
+        }
     }
 
     /// `base` with these switches applied (every other mask setting kept).
     pub fn apply(&self, base: &MaskConfig) -> anyhow::Result<MaskConfig> {
         let mut m = base.clone();
-        m.reinit = self.reinit;
+        m.reinit_weights = self.reinit_weights;
+        m.reinit_scores = self.reinit_scores;
+        m.reinit_range = self.reinit_range;
+        m.bias_start = self.bias_start;
         m.entropy = self.entropy;
         m.capacity = self.capacity;
         m.private_share = self.private_share;
@@ -134,7 +156,10 @@ impl Switches {
     /// These switches with `over`'s set fields replacing them.
     pub fn with(&self, over: &SwitchOverrides) -> Self {
         Self {
-            reinit: over.reinit.unwrap_or(self.reinit),
+            reinit_weights: over.reinit_weights.unwrap_or(self.reinit_weights),
+            reinit_scores: over.reinit_scores.unwrap_or(self.reinit_scores),
+            reinit_range: over.reinit_range.unwrap_or(self.reinit_range),
+            bias_start: over.bias_start.unwrap_or(self.bias_start),
             entropy: over.entropy.unwrap_or(self.entropy),
             lambda: over.lambda.unwrap_or(self.lambda),
             capacity: over.capacity.unwrap_or(self.capacity),
@@ -148,8 +173,15 @@ impl Switches {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SwitchOverrides {
-    /// See [`Switches::reinit`].
-    pub reinit: Option<bool>,
+    /// See [`Switches::reinit_weights`].
+    #[serde(alias = "reinit")]
+    pub reinit_weights: Option<bool>,
+    /// See [`Switches::reinit_scores`].
+    pub reinit_scores: Option<ScoreReinit>,
+    /// See [`Switches::reinit_range`].
+    pub reinit_range: Option<ReinitRange>,
+    /// See [`Switches::bias_start`].
+    pub bias_start: Option<BiasStart>,
     /// See [`Switches::entropy`].
     pub entropy: Option<bool>,
     /// See [`Switches::lambda`].
@@ -164,7 +196,10 @@ impl SwitchOverrides {
     /// `self` with `later`'s set fields taking precedence.
     pub fn merged(&self, later: &SwitchOverrides) -> Self {
         Self {
-            reinit: later.reinit.or(self.reinit),
+            reinit_weights: later.reinit_weights.or(self.reinit_weights),
+            reinit_scores: later.reinit_scores.or(self.reinit_scores),
+            reinit_range: later.reinit_range.or(self.reinit_range),
+            bias_start: later.bias_start.or(self.bias_start),
             entropy: later.entropy.or(self.entropy),
             lambda: later.lambda.or(self.lambda),
             capacity: later.capacity.or(self.capacity),
@@ -212,13 +247,22 @@ mod tests {
 
     #[test]
     fn switches_round_trip_through_the_mask_config() {
-        let s =
-            Switches { reinit: false, entropy: false, lambda: LambdaMode::Free, capacity: 0.3, private_share: 0.05 };
+        let s = Switches {
+            reinit_weights: false,
+            reinit_scores: ScoreReinit::All,
+            reinit_range: ReinitRange::HeEffective,
+            bias_start: BiasStart::Zero,
+            entropy: false,
+            lambda: LambdaMode::Free,
+            capacity: 0.3,
+            private_share: 0.05,
+        };
         let m = s.apply(&MaskConfig::default()).unwrap();
         assert_eq!(
-            (m.reinit, m.entropy, m.rule, m.capacity, m.private_share),
-            (false, false, SelectionRule::Free, 0.3, 0.05)
+            (m.reinit_weights, m.reinit_scores, m.reinit_range, m.bias_start),
+            (false, ScoreReinit::All, ReinitRange::HeEffective, BiasStart::Zero)
         );
+        assert_eq!((m.entropy, m.rule, m.capacity, m.private_share), (false, SelectionRule::Free, 0.3, 0.05));
         assert_eq!(Switches::from_mask_config(&m), s);
         assert_eq!(m.sigma_decay, MaskConfig::default().sigma_decay, "other settings are kept");
     }
@@ -226,13 +270,29 @@ mod tests {
     #[test]
     fn overrides_replace_only_the_fields_they_set() {
         let base = Switches::default();
-        let over = SwitchOverrides { reinit: Some(false), ..Default::default() };
+        let over = SwitchOverrides { reinit_weights: Some(false), ..Default::default() };
         let s = base.with(&over);
-        assert!(!s.reinit);
-        assert_eq!(s.entropy, base.entropy);
-        let later = SwitchOverrides { reinit: Some(true), capacity: Some(0.1), ..Default::default() };
+        assert!(!s.reinit_weights);
+        assert_eq!((s.entropy, s.reinit_scores), (base.entropy, base.reinit_scores));
+        let later = SwitchOverrides {
+            reinit_weights: Some(true),
+            reinit_scores: Some(ScoreReinit::None),
+            capacity: Some(0.1),
+            ..Default::default()
+        };
         let m = over.merged(&later);
-        assert_eq!((m.reinit, m.capacity), (Some(true), Some(0.1)));
+        assert_eq!((m.reinit_weights, m.reinit_scores, m.capacity), (Some(true), Some(ScoreReinit::None), Some(0.1)));
+    }
+
+    #[test]
+    fn the_pre_issue_31_reinit_key_still_reads_as_the_weights_switch() {
+        let s: Switches = toml::from_str("reinit = false\n").unwrap();
+        assert!(!s.reinit_weights);
+        assert_eq!(s.reinit_scores, ScoreReinit::Vacant, "unset switches keep their defaults");
+        let o: SwitchOverrides = toml::from_str("reinit = true\nbias_start = \"zero\"\n").unwrap();
+        assert_eq!((o.reinit_weights, o.bias_start), (Some(true), Some(BiasStart::Zero)));
+        let err = toml::from_str::<SwitchOverrides>("reinit_scores = \"some\"\n").unwrap_err().to_string();
+        assert!(err.contains("vacant"), "{err}");
     }
 
     #[test]

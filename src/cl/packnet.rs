@@ -15,7 +15,7 @@
 use super::method::ContinualMethod;
 use super::ours::Switches;
 use crate::config::bounds::{self, POSITIVE_UNIT};
-use crate::config::net::{MaskConfig, SelectionRule};
+use crate::config::net::{MaskConfig, ScoreReinit, SelectionRule};
 use crate::config::ppo::MAX_ITERATIONS;
 use serde::{Deserialize, Serialize};
 
@@ -55,7 +55,8 @@ pub fn without_plasticity_mechanisms(base: &MaskConfig, rule: SelectionRule) -> 
     MaskConfig {
         rule,
         private_share: 0.0,
-        reinit: false,
+        reinit_weights: false,
+        reinit_scores: ScoreReinit::None,
         entropy: false,
         entropy_iterations: 0,
         transfer_bonus: 0.0,

@@ -11,7 +11,7 @@
 //! related = ["invert:RR", "noise:FR"]  # forward transfer (METHOD.md 2.6)
 //! init = "related"           # related | random | scratch
 //! [task.switches]            # ablation switches for this task only (cl::ours)
-//! reinit = false
+//! reinit_weights = false
 //! ```
 //!
 //! A task name may come back later in the sequence: it is then a repeat, trained on

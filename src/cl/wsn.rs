@@ -4,8 +4,9 @@
 //!
 //! - one top-k over the whole layer (the `per-layer` lambda mode), which
 //!   reuses occupied weights freely: no vacant / occupied split per row;
-//! - no re-initialisation of vacant weights, no soft-score entropy, no
-//!   private elements (`reinit`, `entropy` off, `private_share` 0);
+//! - no re-initialisation of vacant weights or scores, no soft-score entropy,
+//!   no private elements (`reinit_weights`, `entropy` off, `reinit_scores`
+//!   none, `private_share` 0);
 //! - deterministic scores: sigma is 1e-6 of the 0.3 score spread and never
 //!   trains (`entropy_iterations` 0), so the mask is the top-k of the score
 //!   means, straight-through as in WSN.
@@ -14,7 +15,7 @@
 
 use super::method::ContinualMethod;
 use super::ours::{LambdaMode, Switches};
-use crate::config::net::{MaskConfig, SigmaScale};
+use crate::config::net::{MaskConfig, ScoreReinit, SigmaScale};
 
 /// The method `wsn`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -25,7 +26,14 @@ pub const WSN_SIGMA: f64 = 1e-6;
 
 /// The run's switches with WSN's rules: only the capacity is the run's.
 fn wsn_switches(switches: &Switches) -> Switches {
-    Switches { reinit: false, entropy: false, lambda: LambdaMode::PerLayer, private_share: 0.0, ..*switches }
+    Switches {
+        reinit_weights: false,
+        reinit_scores: ScoreReinit::None,
+        entropy: false,
+        lambda: LambdaMode::PerLayer,
+        private_share: 0.0,
+        ..*switches
+    }
 }
 
 impl ContinualMethod for Wsn {
@@ -64,8 +72,8 @@ mod tests {
         let switches = Switches { capacity: 0.3, ..Switches::default() };
         let m = Wsn.task_mask_config(&MaskConfig::default(), &switches, 10).unwrap();
         assert_eq!(
-            (m.rule, m.reinit, m.entropy, m.private_share, m.capacity, m.entropy_iterations),
-            (SelectionRule::PerLayer, false, false, 0.0, 0.3, 0)
+            (m.rule, m.reinit_weights, m.reinit_scores, m.entropy, m.private_share, m.capacity, m.entropy_iterations),
+            (SelectionRule::PerLayer, false, ScoreReinit::None, false, 0.0, 0.3, 0)
         );
         assert!(m.sigma_init <= WSN_SIGMA && m.sigma_floor <= WSN_SIGMA);
         assert_eq!(m.score_init_std, MaskConfig::default().score_init_std, "the rest is the run's");

@@ -4,7 +4,8 @@
 //! by default) and the training config's randomisation and pushes (`--no-pushes`
 //! turns the pushes off; `--push-interval-s` and `--push-max-vel` set another
 //! push regime, e.g. to score policies trained under different pushes on the
-//! same test); prints mean return, tracking errors, fall rate, survival.
+//! same test); prints mean return, normalised performance (over the best return a task
+//! allows, as metrics.json has it), tracking errors, fall rate, survival.
 
 use clap::Args;
 use quadcl::config::bounds::{self, NON_NEGATIVE};
@@ -68,11 +69,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     // An episode lasts at most `episode_s`; allow a margin.
     let max_steps = (f64::from(env_cfg.episode_s) / f64::from(env_cfg.policy_dt())).ceil() as usize + 10;
     let report = quadcl::rl::evaluate(agent, &mut env, &task.to_string(), args.seed, max_steps)?;
+    // Normalised performance as metrics.json's evaluations have it (METHOD.md 4).
+    let mut value = serde_json::to_value(&report)?;
+    let fields = value.as_object_mut().expect("a struct serialises to an object");
+    fields.insert("performance".into(), (report.mean_return / quadcl::engine::max_episode_return(env_cfg)).into());
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        println!("{value}");
     } else {
-        let value = serde_json::to_value(&report)?;
-        for (key, v) in value.as_object().expect("a struct serialises to an object") {
+        for (key, v) in fields.iter() {
             println!("{key:<14} {v}");
         }
     }

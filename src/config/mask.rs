@@ -36,15 +36,71 @@ impl SelectionRule {
     }
 }
 
-/// Where a new task's per-task bias starts (METHOD.md 2.6; the paper does not say).
+/// Where a new task's per-task bias starts (METHOD.md 2.4 step 6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum BiasStart {
-    /// The mean of the related tasks' biases (zero without any, e.g. in `scratch` mode).
+    /// The bias of the task that ended last (the last new task to end: the network the new task
+    /// continues; zero for the first task): METHOD.md's default, the paper's "further training on the originally learned
+    /// network". Every forward-transfer mode starts from it, so only the score bonus differs.
     #[default]
+    Previous,
+    /// Interpretation: the mean of the related tasks' biases (zero without any, e.g. in `scratch`
+    /// mode). The default before issue 31, so a task named related to none started at zero.
     Related,
-    /// Zero for every task, whatever its related tasks: every transfer mode starts alike.
+    /// Interpretation: zero for every task, whatever came before.
     Zero,
+}
+
+/// Which soft-score means are redrawn at the end of a task (METHOD.md 2.4 step 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ScoreReinit {
+    /// The means of elements still VACANT are redrawn; OCCUPIED ones keep the ranking the tasks
+    /// learned, so the next task's occupied quota starts from the top of the previous task's
+    /// ranking (the paper's "vacant parameters" reading of its 2.4, and METHOD.md's default).
+    #[default]
+    Vacant,
+    /// Interpretation: every mean is redrawn (the paper's "entire soft network"; before issue 31
+    /// the only behaviour): the next task's occupied quota is ranked by fresh noise.
+    All,
+    /// No mean is redrawn: the next task starts from the previous task's whole ranking.
+    None,
+}
+
+/// The range re-initialised vacant weights are drawn from (METHOD.md 2.4 step 4), before
+/// `reinit_scale`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ReinitRange {
+    /// U(-b, b) with b = sqrt(g / F): the layer's own uniform initialiser (g = 6 before an ELU or
+    /// ReLU, 3 otherwise, times the layer's init scale) over its full fan-in F, the paper's
+    /// "random initialization states". A fresh weight then adds about (lambda / (1 - lambda)) * c
+    /// of the selected occupied weights' output variance instead of lambda / (1 - lambda)
+    /// (PyTorch's default linear layer draws at 1 / sqrt(F), a further sqrt(g) smaller).
+    #[default]
+    Initial,
+    /// Interpretation: b = sqrt(g / (c F)), He for the effective fan-in of a masked row, the
+    /// range of the layer's first weights (before issue 31 the only behaviour): about
+    /// 1 / sqrt(c) wider than `initial`, 5.5x PyTorch's default at c 0.2.
+    HeEffective,
+}
+
+/// The three readings' names as run files spell them (`previous`, `vacant`, `he_effective`, ...).
+macro_rules! display_as_in_files {
+    ($($ty:ty { $($variant:ident => $text:literal),+ })+) => {$(
+        impl std::fmt::Display for $ty {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(match self { $(Self::$variant => $text),+ })
+            }
+        }
+    )+};
+}
+
+display_as_in_files! {
+    BiasStart { Previous => "previous", Related => "related", Zero => "zero" }
+    ScoreReinit { Vacant => "vacant", All => "all", None => "none" }
+    ReinitRange { Initial => "initial", HeEffective => "he_effective" }
 }
 
 /// What the soft-score sigma is measured in (METHOD.md 2.3; the scale is ours, the paper gives none).
@@ -135,9 +191,17 @@ pub struct MaskConfig {
     /// by a factor of about exp(lr) per step and without a bound the entropy term would drown the
     /// scores' ranking.
     pub sigma_max: f64,
-    /// Re-initialise vacant weights and redraw soft-score means at the end of each task (METHOD.md 2.4).
-    pub reinit: bool,
-    /// The range of re-initialised vacant weights as a fraction of the initialiser's (1 = METHOD.md
+    /// Re-initialise the weights still VACANT at the end of each task (METHOD.md 2.4 step 4);
+    /// `reinit` in files written before issue 31, when it also redrew every soft-score mean.
+    #[serde(alias = "reinit")]
+    pub reinit_weights: bool,
+    /// Which soft-score means are redrawn at the end of each task: `vacant` (METHOD.md 2.4, the
+    /// default: the learned ranking of occupied elements survives), `all` or `none`.
+    pub reinit_scores: ScoreReinit,
+    /// The range of re-initialised vacant weights: `initial` (the layer's initialiser over its
+    /// full fan-in, the default) or `he_effective` (over c times the fan-in).
+    pub reinit_range: ReinitRange,
+    /// The range of re-initialised vacant weights as a fraction of `reinit_range`'s (1 = METHOD.md
     /// 2.4 as written). Below 1, a later task that selects all of a related task's elements plus
     /// fresh vacant ones starts close to the related task's function: at 1 the fresh elements
     /// (a quarter of a row's selection at lambda 0.25) add noise of about a third of the layer's
@@ -160,7 +224,8 @@ pub struct MaskConfig {
     /// straight-through gradient); off: only vacant elements' scores move, occupied ones keep
     /// the ranking the task started with (its transfer bonus included).
     pub score_grad_occupied: bool,
-    /// Where a new task's bias starts: `related` (the related tasks' mean) or `zero`.
+    /// Where a new task's bias starts: `previous` (the task that ended last, the default),
+    /// `related` (the related tasks' mean) or `zero`.
     pub bias_start: BiasStart,
 }
 
@@ -182,7 +247,9 @@ impl Default for MaskConfig {
             sigma_decay: 0.99,
             sigma_floor: 1e-3,
             sigma_max: 4.0,
-            reinit: true,
+            reinit_weights: true,
+            reinit_scores: ScoreReinit::Vacant,
+            reinit_range: ReinitRange::Initial,
             reinit_scale: 1.0,
             transfer_bonus: 3.0,
             packnet_keep: 0.5,
@@ -190,21 +257,44 @@ impl Default for MaskConfig {
             piggyback_threshold: 5e-3,
             piggyback_init: 1e-2,
             score_grad_occupied: true,
-            bias_start: BiasStart::Related,
+            bias_start: BiasStart::Previous,
         }
     }
 }
 
 impl MaskConfig {
-    /// These settings with `other`'s end-of-task ones (`private_share`, `reinit`,
-    /// `reinit_scale`): the ones that act only when a task ends (METHOD.md 2.4), so
-    /// they may change while a task is in progress.
+    /// These settings with `other`'s that do not act while a task is in progress: the end-of-task
+    /// ones (`private_share`, `reinit_weights`, `reinit_scores`, `reinit_range`, `reinit_scale`,
+    /// METHOD.md 2.4) and `bias_start`, which acts only when a new task begins. They may change
+    /// while a task is in progress (a resumed checkpoint, the workbench's next-task switches).
     pub fn with_end_of_task(&self, other: &MaskConfig) -> MaskConfig {
         MaskConfig {
             private_share: other.private_share,
-            reinit: other.reinit,
+            reinit_weights: other.reinit_weights,
+            reinit_scores: other.reinit_scores,
+            reinit_range: other.reinit_range,
             reinit_scale: other.reinit_scale,
+            bias_start: other.bias_start,
             ..self.clone()
+        }
+    }
+
+    /// Fills in what a saved mask configuration from before issue 31 left out, as it ran: `reinit`
+    /// redrew the vacant weights at the He range of the effective fan-in and every soft-score mean
+    /// (`reinit_scores = "all"`, or `"none"` when off), and a new task's bias started from its
+    /// related tasks' mean. For checkpoints and manifests, which record a run; a run file a user
+    /// writes takes the defaults. Anything but a JSON object is left as it is.
+    pub fn fill_in_pre_issue_31(mask: &mut serde_json::Value) {
+        if let Some(m) = mask.as_object_mut() {
+            if let Some(reinit) = m.remove("reinit") {
+                m.entry("reinit_weights").or_insert(reinit);
+            }
+            if !m.contains_key("reinit_scores") {
+                let on = m.get("reinit_weights").and_then(|v| v.as_bool()).unwrap_or(true);
+                m.insert("reinit_scores".into(), if on { "all" } else { "none" }.into());
+                m.entry("reinit_range").or_insert("he_effective".into());
+                m.entry("bias_start").or_insert("related".into());
+            }
         }
     }
 

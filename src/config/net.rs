@@ -2,7 +2,9 @@
 //! activation per network, and the mask settings of the method (in [`super::mask`],
 //! re-exported here).
 
-pub use super::mask::{row_quota, BiasStart, EntropyTarget, MaskConfig, SelectionRule, SigmaScale};
+pub use super::mask::{
+    row_quota, BiasStart, EntropyTarget, MaskConfig, ReinitRange, ScoreReinit, SelectionRule, SigmaScale,
+};
 use serde::{Deserialize, Serialize};
 
 /// The activation between hidden layers of a [`crate::nn::MaskedMlp`]

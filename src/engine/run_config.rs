@@ -9,7 +9,7 @@
 //! iterations = 300            # default budget per task
 //! [method]
 //! name = "ours"               # or finetune, ewc, si (`quadcl run --method` overrides it)
-//! reinit = true               # switches of cl::ours; unset ones follow [net.mask]
+//! reinit_weights = true       # switches of cl::ours; unset ones follow [net.mask]
 //! lambda = "0.25"
 //! [method.ewc]                # each method's settings in its own table
 //! lambda = 1e4
@@ -279,7 +279,7 @@ mod tests {
         let r = RunConfig::from_toml_str(SMALL).unwrap();
         assert_eq!(r.config.seed, 4);
         assert_eq!(r.method, "ours");
-        assert!(!r.switches.reinit);
+        assert!(!r.switches.reinit_weights);
         assert_eq!(r.switches.lambda, crate::cl::LambdaMode::Free);
         assert_eq!(r.run.learner, LearnerKind::Toy);
         assert_eq!(r.sequence.tasks.len(), 2);

@@ -87,10 +87,19 @@ impl MetricsFile {
         }
     }
 
-    /// Reads a `metrics.json`; errors name the file.
+    /// Reads a `metrics.json`; errors name the file. A step's switches recorded before issue 31
+    /// are read as they ran ([`crate::config::net::MaskConfig::fill_in_pre_issue_31`]: `reinit`
+    /// redrew every score, over the effective fan-in, with the related tasks' bias).
     pub fn load(path: &Path) -> anyhow::Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))
+        let not_metrics = || format!("{}: not a quadcl run's metrics.json", path.display());
+        let mut value: serde_json::Value = serde_json::from_str(&text).with_context(not_metrics)?;
+        if let Some(steps) = value.get_mut("steps").and_then(|s| s.as_array_mut()) {
+            for switches in steps.iter_mut().filter_map(|s| s.get_mut("switches")) {
+                crate::config::net::MaskConfig::fill_in_pre_issue_31(switches);
+            }
+        }
+        serde_json::from_value(value).with_context(not_metrics)
     }
 
     /// The per-step curves of normalised performance, by task name (first training of each).

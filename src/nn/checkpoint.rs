@@ -119,6 +119,10 @@ struct LayerEntry {
     name: String,
     shape: [usize; 2],
     init_bound: f32,
+    /// The initialiser's range over the full fan-in (`reinit_range = "initial"`); absent before
+    /// issue 31, then derived from `init_bound` and the network's capacity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    full_fan_in_bound: Option<f32>,
 }
 
 /// Writes a policy directory (creating it). `tasks` names every TaskId the networks use.
@@ -176,7 +180,12 @@ pub fn save_policy(
                     Raw { dtype: Dtype::U8, shape: vec![m.as_bytes().len()], bytes: m.as_bytes().to_vec() },
                 );
             }
-            layers.push(LayerEntry { name: n.clone(), shape: [l.out_dim, l.in_dim], init_bound: l.init_bound });
+            layers.push(LayerEntry {
+                name: n.clone(),
+                shape: [l.out_dim, l.in_dim],
+                init_bound: l.init_bound,
+                full_fan_in_bound: Some(l.full_fan_in_bound),
+            });
         }
         let training = net.layers()[0].training.as_ref().map(|t| TrainingEntry {
             task: t.task,
@@ -265,16 +274,18 @@ pub fn tensor_integer(t: &Tensor, name: &str) -> anyhow::Result<u64> {
     }
 }
 
-/// [`MaskConfig::fill_in_pre_issue_13`] on every network's `mask` and on the run
-/// configuration's `net.mask` of a manifest.
-fn fill_in_pre_issue_13_masks(manifest: &mut serde_json::Value) {
+/// [`MaskConfig::fill_in_pre_issue_13`] and [`MaskConfig::fill_in_pre_issue_31`] on every
+/// network's `mask` and on the run configuration's `net.mask` of a manifest.
+fn fill_in_old_masks(manifest: &mut serde_json::Value) {
+    let fill = |mask: &mut serde_json::Value| {
+        MaskConfig::fill_in_pre_issue_13(mask);
+        MaskConfig::fill_in_pre_issue_31(mask);
+    };
     if let Some(networks) = manifest.get_mut("networks").and_then(|n| n.as_array_mut()) {
-        for n in networks.iter_mut().filter_map(|n| n.get_mut("mask")) {
-            MaskConfig::fill_in_pre_issue_13(n);
-        }
+        networks.iter_mut().filter_map(|n| n.get_mut("mask")).for_each(fill);
     }
     if let Some(mask) = manifest.pointer_mut("/config/config/net/mask") {
-        MaskConfig::fill_in_pre_issue_13(mask);
+        fill(mask);
     }
 }
 
@@ -285,10 +296,10 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
         std::fs::read_to_string(&manifest_path).with_context(|| format!("reading {}", manifest_path.display()))?;
     let manifest_json: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
-    // Masks saved before issue 13 ran with sigma in score units (the digest below is of the
-    // file as written).
+    // Masks saved before issue 13 ran with sigma in score units, before issue 31 with every
+    // score redrawn at a task's end (the digest below is of the file as written).
     let mut upgraded = manifest_json.clone();
-    fill_in_pre_issue_13_masks(&mut upgraded);
+    fill_in_old_masks(&mut upgraded);
     let manifest = Manifest::deserialize(&upgraded)
         .with_context(|| format!("{}: not a valid manifest", manifest_path.display()))?;
     ensure!(
@@ -364,6 +375,15 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 le.name,
                 le.init_bound
             );
+            // sqrt(g / F) = sqrt(g / (c F)) * sqrt(c F / F), c F at least 1 as the layer made it.
+            let derived = || le.init_bound * ((e.mask.capacity * in_dim as f64).max(1.0) / in_dim as f64).sqrt() as f32;
+            let full_fan_in_bound = le.full_fan_in_bound.unwrap_or_else(derived);
+            ensure!(
+                full_fan_in_bound.is_finite() && full_fan_in_bound > 0.0,
+                "{}: layer {} has full_fan_in_bound {full_fan_in_bound}, expected a finite value > 0",
+                ctx(),
+                le.name
+            );
             let n = &le.name;
             let shape = [out_dim, in_dim];
             let states = model
@@ -415,6 +435,7 @@ pub fn load_policy(dir: &Path) -> anyhow::Result<Policy> {
                 in_dim,
                 cfg: e.mask.clone(),
                 init_bound: le.init_bound,
+                full_fan_in_bound,
                 weight: var(model.f32s(&format!("{n}.weight"), &shape)?, &shape)?,
                 score_mean: var(model.f32s(&format!("{n}.score"), &shape)?, &shape)?,
                 log_sigma: var(model.log_sigma(n)?, &[1])?,

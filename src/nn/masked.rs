@@ -27,7 +27,7 @@ use super::masked_weight::masked_weight;
 use super::select::{select_mask, SelectionParams};
 use super::state::{ElementState, TaskId};
 use super::Param;
-use crate::config::net::{BiasStart, MaskConfig, SelectionRule};
+use crate::config::net::{BiasStart, MaskConfig, ReinitRange, ScoreReinit, SelectionRule};
 use anyhow::Context;
 use candle_core::{Device, Tensor, Var};
 use rand::Rng;
@@ -89,8 +89,11 @@ pub struct MaskedLinear {
     pub(crate) out_dim: usize,
     pub(crate) in_dim: usize,
     pub(crate) cfg: MaskConfig,
-    /// Half-width of the uniform initialiser of W.
+    /// Half-width of the uniform initialiser of W: sqrt(g / (c F)), He for the effective fan-in.
     pub(crate) init_bound: f32,
+    /// Half-width of the layer's initialiser over its full fan-in F, sqrt(g / F) (times the same
+    /// init scale): the range of `reinit_range = "initial"`.
+    pub(crate) full_fan_in_bound: f32,
     pub(crate) weight: Var,
     pub(crate) score_mean: Var,
     /// ln sigma, shape (1,); sigma = exp(log_sigma) is always > 0.
@@ -125,6 +128,7 @@ fn mask_tensor(bits: impl Iterator<Item = bool>, out_dim: usize, in_dim: usize) 
 impl MaskedLinear {
     /// A fresh layer: every element vacant, W ~ U(-b, b) with b = sqrt(6 / (c * in)) (He for the
     /// effective fan-in of a masked row; sqrt(3 / (c * in)) when `gain_relu` is false), mu ~ N(0, score_init_std).
+    /// Re-initialised vacant weights draw from sqrt(g / in) or this range (`reinit_range`).
     pub fn new(
         name: &str,
         in_dim: usize,
@@ -137,7 +141,9 @@ impl MaskedLinear {
         anyhow::ensure!(in_dim > 0 && out_dim > 0, "{name}: layer shape ({out_dim}, {in_dim}) must be non-empty");
         cfg.check_selects_in(name, out_dim, in_dim)?;
         let eff_fan_in = (cfg.capacity * in_dim as f64).max(1.0);
-        let init_bound = ((if gain_relu { 6.0 } else { 3.0 }) / eff_fan_in).sqrt() as f32;
+        let gain = if gain_relu { 6.0 } else { 3.0 };
+        let init_bound = (gain / eff_fan_in).sqrt() as f32;
+        let full_fan_in_bound = (gain / in_dim as f64).sqrt() as f32;
         let n = out_dim * in_dim;
         let dist = Uniform::new_inclusive(-init_bound, init_bound);
         let w: Vec<f32> = (0..n).map(|_| dist.sample(rng)).collect();
@@ -148,6 +154,7 @@ impl MaskedLinear {
             in_dim,
             cfg: cfg.clone(),
             init_bound,
+            full_fan_in_bound,
             weight: var_from(w, &[out_dim, in_dim])?,
             score_mean: var_from(mu, &[out_dim, in_dim])?,
             log_sigma: var_from(vec![(cfg.sigma_init as f32).ln()], &[1])?,
@@ -209,6 +216,7 @@ impl MaskedLinear {
         );
         set_var(&self.weight, var_values(&self.weight)?.into_iter().map(|w| w * factor).collect())?;
         self.init_bound *= factor;
+        self.full_fan_in_bound *= factor;
         Ok(())
     }
 
@@ -246,8 +254,7 @@ impl MaskedLinear {
         SelectionParams { capacity: self.cfg.capacity, vacant_share: self.cfg.vacant_share, rule: self.cfg.rule }
     }
 
-    /// A new task's starting bias: the mean of its related tasks' biases (zero without any), so
-    /// that a task which reuses a related task's weights also starts from its offsets.
+    /// A new task's starting bias: the mean of its related tasks' biases (zero without any).
     fn related_bias(&self, related: &[TaskId]) -> anyhow::Result<Vec<f32>> {
         let mut bias = vec![0.0f32; self.out_dim];
         for r in related {
@@ -257,9 +264,23 @@ impl MaskedLinear {
         Ok(bias)
     }
 
-    /// Starts training `task`: repeat mode if it already finished, otherwise a fresh bias
-    /// (the mean of the related tasks' biases, zero without any),
-    /// sigma back to its initial value, and mu += delta on the elements of related tasks' masks (2.6).
+    /// A new task's starting bias under `bias_start` (METHOD.md 2.4 step 6): the bias of the task
+    /// that ended last (`previous`: the last of the finish order, since a repeat only continues a
+    /// task; zero before any), the related tasks' mean, or zero.
+    fn start_bias(&self, related: &[TaskId]) -> anyhow::Result<Vec<f32>> {
+        Ok(match self.cfg.bias_start {
+            BiasStart::Previous => match self.finish_order.last() {
+                Some(last) => self.biases[last].clone(),
+                None => vec![0.0; self.out_dim],
+            },
+            BiasStart::Related => self.related_bias(related)?,
+            BiasStart::Zero => vec![0.0; self.out_dim],
+        })
+    }
+
+    /// Starts training `task`: repeat mode if it already finished (its own bias), otherwise a
+    /// new task: its bias from `bias_start`, sigma back to its initial value, and mu += delta on
+    /// the elements of related tasks' masks (2.6).
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {
         anyhow::ensure!(
             self.training.is_none(),
@@ -268,10 +289,9 @@ impl MaskedLinear {
             self.training.as_ref().map_or(0, |t| t.task)
         );
         let repeat = self.masks.contains_key(&task);
-        let bias = match (self.biases.get(&task), self.cfg.bias_start) {
-            (Some(b), _) => b.clone(),
-            (None, BiasStart::Related) => self.related_bias(related)?,
-            (None, BiasStart::Zero) => vec![0.0; self.out_dim],
+        let bias = match self.biases.get(&task) {
+            Some(b) => b.clone(),
+            None => self.start_bias(related)?,
         };
         let bias = var_from(bias, &[self.out_dim])?;
         if !repeat && self.cfg.rule == SelectionRule::Piggyback {
@@ -392,8 +412,21 @@ impl MaskedLinear {
         }
         self.masks.insert(t.task, BitMask::from_bools(&selected));
         self.finish_order.push(t.task);
-        if self.cfg.reinit {
-            let bound = self.init_bound * self.cfg.reinit_scale as f32;
+        self.reinitialise(rng)
+    }
+
+    /// METHOD.md 2.4 step 4: the weights still VACANT redrawn from `reinit_range` times
+    /// `reinit_scale` (`reinit_weights`), then the soft-score means `reinit_scores` names redrawn
+    /// from N(0, score_init_std). One weight is drawn per vacant element and one mean per element
+    /// whatever is kept, so every reading consumes the random stream alike (`all` with `he_effective`
+    /// draws exactly what the layer drew before issue 31).
+    fn reinitialise(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
+        if self.cfg.reinit_weights {
+            let range = match self.cfg.reinit_range {
+                ReinitRange::Initial => self.full_fan_in_bound,
+                ReinitRange::HeEffective => self.init_bound,
+            };
+            let bound = range * self.cfg.reinit_scale as f32;
             let dist = Uniform::new_inclusive(-bound, bound);
             let mut w = var_values(&self.weight)?;
             for (w, s) in w.iter_mut().zip(&self.states) {
@@ -402,7 +435,21 @@ impl MaskedLinear {
                 }
             }
             set_var(&self.weight, w)?;
-            set_var(&self.score_mean, Self::draw_scores(n, self.cfg.score_init_std, rng))?;
+        }
+        let redraw = |s: &ElementState| match self.cfg.reinit_scores {
+            ScoreReinit::All => true,
+            ScoreReinit::Vacant => *s == ElementState::Vacant,
+            ScoreReinit::None => false,
+        };
+        if self.cfg.reinit_weights || self.cfg.reinit_scores != ScoreReinit::None {
+            let fresh = Self::draw_scores(self.states.len(), self.cfg.score_init_std, rng);
+            let mut mu = var_values(&self.score_mean)?;
+            for ((m, f), s) in mu.iter_mut().zip(fresh).zip(&self.states) {
+                if redraw(s) {
+                    *m = f;
+                }
+            }
+            set_var(&self.score_mean, mu)?;
         }
         Ok(())
     }

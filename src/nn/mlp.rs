@@ -94,7 +94,7 @@ impl MaskedMlp {
         &self.cfg
     }
 
-    /// Replaces the mask settings (capacity, lambda rule, private share, entropy, reinit, ...)
+    /// Replaces the mask settings (capacity, lambda rule, private share, entropy, re-initialisation, ...)
     /// of the network and every layer, for the NEXT task: only allowed between tasks, so a
     /// task in progress never sees its rules change. The layers' initialiser bounds stay.
     pub fn set_mask_config(&mut self, cfg: &MaskConfig) -> anyhow::Result<()> {

@@ -35,7 +35,7 @@ mod stats;
 mod wide;
 
 pub use crate::config::net::{
-    Activation, BiasStart, EntropyTarget, MaskConfig, NetworkKind, SelectionRule, SigmaScale,
+    Activation, BiasStart, EntropyTarget, MaskConfig, NetworkKind, ReinitRange, ScoreReinit, SelectionRule, SigmaScale,
 };
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};

@@ -103,9 +103,10 @@ pub fn train(
 
 /// Reads `out/checkpoint/` for `--resume`: the agent and where the run was.
 /// The checkpoint must belong to the same task and configuration, apart
-/// from `ppo.iterations` (which may grow) and the mask settings that act only
-/// when the task ends (`private_share`, `reinit`, `reinit_scale`: METHOD.md
-/// 2.4), so a finished run can be ended again with other ones; errors name the folder.
+/// from `ppo.iterations` (which may grow) and the mask settings that do not act
+/// while a task is in progress ([`crate::config::net::MaskConfig::with_end_of_task`]:
+/// METHOD.md 2.4, and where the next task's bias starts), so a finished run can be
+/// ended again with other ones; errors name the folder.
 pub fn load_resume_point(config: &Config, task: &str, out: &Path) -> anyhow::Result<ResumePoint> {
     let dir = out.join("checkpoint");
     crate::util::recover_replaced_dir(&dir)?;

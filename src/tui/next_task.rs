@@ -7,12 +7,22 @@
 
 use super::worker::Opened;
 use crate::cl::{LambdaMode, SwitchOverrides, Switches, TaskSpec, TransferInit};
+use crate::config::net::{BiasStart, ReinitRange, ScoreReinit};
 use crate::engine::Command;
 use crate::nn::LayerLift;
 use std::str::FromStr;
 
 /// The switch rows, then the mode row, then one row per learned task, then "add a task".
-pub const SWITCH_ROWS: [&str; 5] = ["reinit", "entropy", "lambda", "capacity c", "private share p"];
+pub const SWITCH_ROWS: [&str; 8] = [
+    "reinit weights",
+    "reinit scores",
+    "reinit range",
+    "bias start",
+    "entropy",
+    "lambda",
+    "capacity c",
+    "private share p",
+];
 const MODE_ROW: usize = SWITCH_ROWS.len();
 
 /// The engine's transfer preview for one choice of related tasks and mode.
@@ -56,6 +66,17 @@ const LAMBDAS: [LambdaMode; 8] = [
     LambdaMode::Vacant,
     LambdaMode::PerLayer,
 ];
+
+const SCORE_REINITS: [ScoreReinit; 3] = [ScoreReinit::Vacant, ScoreReinit::All, ScoreReinit::None];
+const REINIT_RANGES: [ReinitRange; 2] = [ReinitRange::Initial, ReinitRange::HeEffective];
+const BIAS_STARTS: [BiasStart; 3] = [BiasStart::Previous, BiasStart::Related, BiasStart::Zero];
+
+/// The value after (`dir` >= 0) or before `now` in `values`, wrapping around.
+fn cycle<T: Copy + PartialEq>(values: &[T], now: T, dir: i8) -> T {
+    let i = values.iter().position(|v| *v == now).unwrap_or(0);
+    let n = values.len();
+    values[if dir < 0 { (i + n - 1) % n } else { (i + 1) % n }]
+}
 
 impl NextTask {
     /// Points the controls at step `step` of the open run.
@@ -120,15 +141,14 @@ impl NextTask {
         let round = |x: f64| (x * 100.0).round() / 100.0;
         let mut over = SwitchOverrides::default();
         match self.cursor {
-            0 => over.reinit = Some(!now.reinit),
-            1 => over.entropy = Some(!now.entropy),
-            2 => {
-                let i = LAMBDAS.iter().position(|l| *l == now.lambda).unwrap_or(0);
-                let n = LAMBDAS.len();
-                over.lambda = Some(LAMBDAS[if dir < 0 { (i + n - 1) % n } else { (i + 1) % n }]);
-            }
-            3 => over.capacity = Some(round((now.capacity + step).clamp(0.01, 1.0))),
-            4 => over.private_share = Some(round((now.private_share + step).clamp(0.0, 1.0))),
+            0 => over.reinit_weights = Some(!now.reinit_weights),
+            1 => over.reinit_scores = Some(cycle(&SCORE_REINITS, now.reinit_scores, dir)),
+            2 => over.reinit_range = Some(cycle(&REINIT_RANGES, now.reinit_range, dir)),
+            3 => over.bias_start = Some(cycle(&BIAS_STARTS, now.bias_start, dir)),
+            4 => over.entropy = Some(!now.entropy),
+            5 => over.lambda = Some(cycle(&LAMBDAS, now.lambda, dir)),
+            6 => over.capacity = Some(round((now.capacity + step).clamp(0.01, 1.0))),
+            7 => over.private_share = Some(round((now.private_share + step).clamp(0.0, 1.0))),
             MODE_ROW => {
                 let (related, init) = self.related();
                 let modes = [TransferInit::Related, TransferInit::Random, TransferInit::Scratch];

@@ -106,7 +106,10 @@ impl Session {
         if let Some(p) = &self.in_progress {
             let s = p.record.switches.clone().unwrap_or_else(|| self.switches.clone());
             let switches = SwitchOverrides {
-                reinit: Some(s.reinit),
+                reinit_weights: Some(s.reinit_weights),
+                reinit_scores: Some(s.reinit_scores),
+                reinit_range: Some(s.reinit_range),
+                bias_start: Some(s.bias_start),
                 entropy: Some(s.entropy),
                 lambda: Some(s.lambda),
                 capacity: Some(s.capacity),

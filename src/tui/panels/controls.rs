@@ -14,9 +14,18 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Wrap};
 use ratatui::Frame;
 
-fn switch_values(s: &Switches) -> [String; 5] {
+fn switch_values(s: &Switches) -> [String; 8] {
     let on = |b: bool| if b { "on" } else { "off" }.to_string();
-    [on(s.reinit), on(s.entropy), s.lambda.to_string(), format!("{:.2}", s.capacity), format!("{:.2}", s.private_share)]
+    [
+        on(s.reinit_weights),
+        s.reinit_scores.to_string(),
+        s.reinit_range.to_string(),
+        s.bias_start.to_string(),
+        on(s.entropy),
+        s.lambda.to_string(),
+        format!("{:.2}", s.capacity),
+        format!("{:.2}", s.private_share),
+    ]
 }
 
 pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
@@ -49,7 +58,7 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
         ));
     }
     lines.push(Line::styled(
-        format!("  {:<18} {:>10} {:>12}", "switch", "pending", "in force"),
+        format!("  {:<18} {:>12} {:>13}", "switch", "pending", "in force"),
         Style::new().fg(Color::Gray).add_modifier(Modifier::UNDERLINED),
     ));
     let cursor_style = |row: usize| {
@@ -65,15 +74,15 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
         let value = Style::new().fg(if changed { Color::Yellow } else { Color::White });
         lines.push(Line::from(vec![
             Span::styled(format!("  {name:<18} "), cursor_style(i)),
-            Span::styled(format!("{:>10}", p[i]), value.patch(cursor_style(i))),
-            Span::raw(format!(" {:>12}", now[i])),
+            Span::styled(format!("{:>12}", p[i]), value.patch(cursor_style(i))),
+            Span::raw(format!(" {:>13}", now[i])),
         ]));
     }
     let (related, init) = next.related();
     let mode_row = SWITCH_ROWS.len();
     lines.push(Line::raw(""));
     lines.push(Line::styled(
-        format!("  {:<18} {:>10}", "transfer mode", format!("{init:?}").to_lowercase()),
+        format!("  {:<18} {:>12}", "transfer mode", format!("{init:?}").to_lowercase()),
         cursor_style(mode_row),
     ));
     lines.push(Line::styled("  related tasks (enter toggles):", Style::new().fg(Color::Gray)));
