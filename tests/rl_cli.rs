@@ -176,15 +176,11 @@ fn train_refuses_an_out_that_holds_a_run_unless_resume_or_force() {
     assert_ne!(std::fs::read(out.join("metrics.jsonl")).unwrap(), before, "--force trained anew (another seed)");
 }
 
-/// The shipped base run (`policies/base-a1-flat-run`) was saved before issue 13 changed the
-/// soft-score defaults: its manifest names no `sigma_scale`. It must still be read as it ran
-/// (score units), so policies/README's recipe that ends it with p = 0 resumes and makes the
-/// shipped `base-a1-flat-shared` again, byte for byte.
-#[test]
-fn a_base_run_saved_before_the_score_gap_unit_resumes_and_ends_as_it_did() {
+/// Ends a copy of the shipped base run (`policies/base-a1-flat-run`) with `scene` (train --resume
+/// at its last iteration) and returns the folder the ended policy is in.
+fn end_base_run_with(scene: &str, dir: &std::path::Path) -> std::path::PathBuf {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("base-shared");
+    let out = dir.join("base");
     std::fs::create_dir_all(out.join("checkpoint")).unwrap();
     let run = root.join("policies/base-a1-flat-run");
     for f in ["config.toml", "summary.json", "metrics.jsonl"] {
@@ -196,12 +192,40 @@ fn a_base_run_saved_before_the_score_gap_unit_resumes_and_ends_as_it_did() {
     }
     let output = quadcl()
         .current_dir(root)
-        .args(["train", "--config", "scenes/train-base-shared.toml", "--resume", "--iterations", "3175", "--out"])
+        .args(["train", "--config", scene, "--resume", "--iterations", "3175", "--out"])
         .arg(&out)
         .output()
         .unwrap();
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    let made = std::fs::read(out.join("policy/masks.safetensors")).unwrap();
+    out.join("policy")
+}
+
+/// The shipped base run (`policies/base-a1-flat-run`) was saved before issue 13 changed the
+/// soft-score defaults (its manifest names no `sigma_scale`) and before issue 31 split the
+/// re-initialisation (no `reinit_scores`). It must still be read as it ran, so policies/README's
+/// recipe that ends it with p = 0 resumes and makes the shipped `base-a1-flat-shared` again, byte
+/// for byte.
+#[test]
+fn a_base_run_saved_before_the_score_gap_unit_resumes_and_ends_as_it_did() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let policy = end_base_run_with("scenes/train-base-shared.toml", dir.path());
+    let made = std::fs::read(policy.join("masks.safetensors")).unwrap();
     let shipped = std::fs::read(root.join("policies/base-a1-flat-shared/masks.safetensors")).unwrap();
     assert!(made == shipped, "the ended masks differ from the shipped base-a1-flat-shared");
+}
+
+/// The paper regime's base (issue 31): the same run ended keeping the base's ranking makes the
+/// shipped `base-a1-flat-ranked`, masks and model (the kept means, the redrawn vacant weights
+/// and means) byte for byte.
+#[test]
+fn the_base_run_ended_with_the_ranking_kept_is_the_shipped_ranked_base() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let policy = end_base_run_with("scenes/train-base-ranked.toml", dir.path());
+    for file in ["masks.safetensors", "model.safetensors"] {
+        let made = std::fs::read(policy.join(file)).unwrap();
+        let shipped = std::fs::read(root.join("policies/base-a1-flat-ranked").join(file)).unwrap();
+        assert!(made == shipped, "{file} differs from the shipped base-a1-flat-ranked");
+    }
 }
