@@ -9,12 +9,13 @@
 //! | --- | --- | --- |
 //! | [`util`] | atomic writes, content hashes, every random stream's seed | nothing of the crate |
 //! | [`config`] | every hyperparameter, with doc comments and defaults, loadable from TOML | nothing of the crate |
+//! | [`log`] | training curves for other tools: TensorBoard event files and a CSV of scalars | `util` |
 //! | [`sim`] | the Rapier quadruped: URDF loading, PD motors, `LocomotionEnv`, task perturbations, a parallel batch of envs | `config`, `util` |
 //! | [`nn`] | masked networks in candle: `MaskedLinear`, `MaskedMlp`, the masked Adam, checkpoints, mask statistics | `config`, `util` |
-//! | [`rl`] | PPO with a privileged critic and a context estimator (CENet), rollouts, GAE, normalisation, evaluation, policy directories, metric names and progress | `config`, `util`, `sim`, `nn` |
+//! | [`rl`] | PPO with a privileged critic and a context estimator (CENet), rollouts, GAE, normalisation, evaluation, policy directories, metric names and progress | `config`, `util`, `sim`, `nn`, `log` |
 //! | [`cl`] | continual learning around the learner: the method's hooks and switches, sequences, the continual measures | `config`, `util`, `sim`, `nn`, `rl` |
-//! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl`, `record` |
-//! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine`, `record` |
+//! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl`, `record`, `log` |
+//! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine`, `record`, `log` |
 //! | [`record`] | recorders of simulation steps: episodes as MCAP for Foxglove and as Rerun `.rrd` or a live Rerun viewer (`quadcl record`, `quadcl view`) | `util`, `config`, `sim`, `nn`, `rl` |
 //! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record` |
 //!
@@ -34,6 +35,7 @@ pub mod cl;
 pub mod config;
 pub mod engine;
 pub mod headless;
+pub mod log;
 pub mod nn;
 pub mod record;
 pub mod rl;

@@ -23,7 +23,7 @@ fn write_named(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 fn opts(resume: bool, stop_after: Option<usize>) -> RunOptions {
-    RunOptions { resume, progress: false, stop_after, record: None, method: None }
+    RunOptions { resume, progress: false, stop_after, ..Default::default() }
 }
 
 #[test]

@@ -259,7 +259,7 @@ fn fuzz_training_checkpoints() {
     let none = quadcl::sim::Perturbation::none();
     let run = tempfile::tempdir().unwrap();
     let mut env = SimTrainEnv::new(&cfg.env, &none, 3, cfg.seed).unwrap();
-    train_from(&cfg, "none", &mut env, run.path(), false, None).unwrap();
+    train_from(&cfg, "none", &mut env, run.path(), false, true, None).unwrap();
     let state = std::fs::read(run.path().join("checkpoint").join(TRAINING_STATE_FILE)).unwrap();
     let point = load_resume_point(&cfg, "none", run.path()).unwrap();
     let mut learner = PpoLearner::new(cfg.ppo.clone(), point.agent, 3, 0).unwrap();

@@ -38,7 +38,7 @@ fn metric_rows(dir: &std::path::Path) -> Vec<serde_json::Value> {
 fn resume(cfg: &Config, dir: &std::path::Path) -> quadcl::rl::TrainSummary {
     let point = load_resume_point(cfg, "none", dir).unwrap();
     let mut env = ToyEnv::new(16, 10, derive_seed(cfg.seed, Stream::Trainer(point.state.iteration)));
-    train_from(cfg, "none", &mut env, dir, false, Some(point)).unwrap()
+    train_from(cfg, "none", &mut env, dir, false, true, Some(point)).unwrap()
 }
 
 #[test]
@@ -48,7 +48,7 @@ fn a_resumed_run_goes_on_from_its_last_checkpoint() {
     // the 5th row and checkpoint dropped as if interrupted after the 4th.
     let first = toy_config(4);
     let mut env = ToyEnv::new(16, 10, first.seed);
-    train_from(&first, "none", &mut env, dir.path(), false, None).unwrap();
+    train_from(&first, "none", &mut env, dir.path(), false, true, None).unwrap();
     let before = metric_rows(dir.path());
     assert_eq!(before.len(), 4);
 
@@ -59,7 +59,7 @@ fn a_resumed_run_goes_on_from_its_last_checkpoint() {
     assert!(!agent.in_recall() && agent.actor().current_task() == Some(0), "the task must still be in training");
     assert!(!point.is_exact(), "the toy environments keep no replays");
     let mut env = ToyEnv::new(16, 10, derive_seed(longer.seed, Stream::Trainer(point.state.iteration)));
-    let summary = train_from(&longer, "none", &mut env, dir.path(), false, Some(point)).unwrap();
+    let summary = train_from(&longer, "none", &mut env, dir.path(), false, true, Some(point)).unwrap();
     assert_eq!(summary.iterations, 8);
 
     let after = metric_rows(dir.path());
@@ -67,6 +67,17 @@ fn a_resumed_run_goes_on_from_its_last_checkpoint() {
     assert_eq!(after[..4], before[..4], "rows up to the checkpoint are kept as they were");
     let iterations: Vec<f64> = after.iter().map(|r| r["charts/iteration"].as_f64().unwrap()).collect();
     assert_eq!(iterations, (1..=8).map(f64::from).collect::<Vec<_>>());
+    // tb/ reads back as the rows: step = iteration, the resumed file restarting at iteration 5.
+    let files = quadcl::log::read_dir_scalars(&dir.path().join("tb")).unwrap();
+    assert_eq!(files.iter().map(|f| f.session_starts.clone()).collect::<Vec<_>>(), vec![vec![], vec![5]]);
+    let kept: Vec<(i64, f32)> = files
+        .iter()
+        .enumerate()
+        .flat_map(|(i, f)| f.scalars.iter().filter(move |(s, _, _)| i == 1 || *s < 5).map(|(s, t, v)| (*s, t, *v)))
+        .filter(|(_, t, _)| *t == "charts/iteration")
+        .map(|(s, _, v)| (s, v))
+        .collect();
+    assert_eq!(kept, (1..=8).map(|i| (i, i as f32)).collect::<Vec<_>>());
     assert!(dir.path().join("policy").join("manifest.json").is_file());
     assert!(!dir.path().join("checkpoint.new").exists() && !dir.path().join("checkpoint.old").exists());
 }
@@ -76,7 +87,7 @@ fn resuming_with_another_config_or_task_is_an_error_that_changes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = toy_config(3);
     let mut env = ToyEnv::new(16, 10, cfg.seed);
-    train_from(&cfg, "none", &mut env, dir.path(), false, None).unwrap();
+    train_from(&cfg, "none", &mut env, dir.path(), false, true, None).unwrap();
     let snapshot = std::fs::read(dir.path().join("checkpoint").join("model.safetensors")).unwrap();
 
     let mut other = toy_config(6);
@@ -102,7 +113,7 @@ fn ending_a_task_at_its_checkpoint_drops_later_rows_and_keeps_the_time_splits() 
     let dir = tempfile::tempdir().unwrap();
     let cfg = toy_config(4);
     let mut env = ToyEnv::new(16, 10, cfg.seed);
-    train_from(&cfg, "none", &mut env, dir.path(), false, None).unwrap();
+    train_from(&cfg, "none", &mut env, dir.path(), false, true, None).unwrap();
     let rows = metric_rows(dir.path());
     let path = dir.path().join("metrics.jsonl");
     let mut text = std::fs::read_to_string(&path).unwrap();
@@ -129,7 +140,7 @@ fn a_finished_run_may_be_ended_again_with_other_end_of_task_settings_only() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = toy_config(4);
     let mut env = ToyEnv::new(16, 10, cfg.seed);
-    train_from(&cfg, "none", &mut env, dir.path(), false, None).unwrap();
+    train_from(&cfg, "none", &mut env, dir.path(), false, true, None).unwrap();
     let first = load_policy(&dir.path().join("policy"), None).unwrap();
 
     let mut shared = toy_config(4);

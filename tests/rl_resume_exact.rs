@@ -105,12 +105,12 @@ fn files(dir: &Path, skip: &[&str]) -> Vec<(String, Vec<u8>)> {
 fn a_training_crashed_mid_iteration_and_resumed_ends_as_one_that_never_stopped() {
     let cfg = config(7);
     let reference = tempfile::tempdir().unwrap();
-    train_from(&cfg, "none", &mut sim_env(&cfg), reference.path(), false, None).unwrap();
+    train_from(&cfg, "none", &mut sim_env(&cfg), reference.path(), false, true, None).unwrap();
 
     let dir = tempfile::tempdir().unwrap();
     // Crashes in iteration 6 (16 steps an iteration): the checkpoint of iteration 4 is the last.
     let mut crashing = Crashing { inner: sim_env(&cfg), steps_left: 5 * 16 + 9 };
-    let err = train_from(&cfg, "none", &mut crashing, dir.path(), false, None).unwrap_err();
+    let err = train_from(&cfg, "none", &mut crashing, dir.path(), false, true, None).unwrap_err();
     assert!(format!("{err:#}").contains("crashed"), "{err:#}");
     assert_eq!(untimed_rows(dir.path()).len(), 5, "every finished iteration has its row on disk");
 
@@ -118,7 +118,7 @@ fn a_training_crashed_mid_iteration_and_resumed_ends_as_one_that_never_stopped()
     assert_eq!(point.state.iteration, 4);
     assert!(point.is_exact());
     // The environments as a new process builds them: the replays put them where they were.
-    train_from(&cfg, "none", &mut sim_env(&cfg), dir.path(), false, Some(point)).unwrap();
+    train_from(&cfg, "none", &mut sim_env(&cfg), dir.path(), false, true, Some(point)).unwrap();
 
     let (resumed, never_stopped) = (untimed_rows(dir.path()), untimed_rows(reference.path()));
     assert_eq!(resumed.len(), never_stopped.len());
@@ -137,7 +137,7 @@ fn a_training_crashed_mid_iteration_and_resumed_ends_as_one_that_never_stopped()
 fn a_damaged_training_state_is_an_error_naming_the_file_and_the_run_is_kept() {
     let cfg = config(2);
     let dir = tempfile::tempdir().unwrap();
-    train_from(&cfg, "none", &mut sim_env(&cfg), dir.path(), false, None).unwrap();
+    train_from(&cfg, "none", &mut sim_env(&cfg), dir.path(), false, true, None).unwrap();
     let path = dir.path().join("checkpoint").join(quadcl::rl::TRAINING_STATE_FILE);
     let good = std::fs::read(&path).unwrap();
     let policy_before = files(&dir.path().join("policy"), &[]);
@@ -155,7 +155,7 @@ fn a_damaged_training_state_is_an_error_naming_the_file_and_the_run_is_kept() {
         c
     };
     let other = tempfile::tempdir().unwrap();
-    train_from(&wider, "none", &mut sim_env(&wider), other.path(), false, None).unwrap();
+    train_from(&wider, "none", &mut sim_env(&wider), other.path(), false, true, None).unwrap();
     std::fs::copy(other.path().join("checkpoint").join(quadcl::rl::TRAINING_STATE_FILE), &path).unwrap();
     let err = format!("{:#}", load_resume_point(&config(4), "none", dir.path()).unwrap_err());
     assert!(err.contains("does not match the digest in trainer.json"), "{err}");
@@ -165,7 +165,7 @@ fn a_damaged_training_state_is_an_error_naming_the_file_and_the_run_is_kept() {
     state["training_state_sha256"] = quadcl::util::sha256_hex(&std::fs::read(&path).unwrap()).into();
     std::fs::write(&trainer, serde_json::to_string(&state).unwrap()).unwrap();
     let point = load_resume_point(&config(4), "none", dir.path()).unwrap();
-    let err = train_from(&config(4), "none", &mut sim_env(&cfg), dir.path(), false, Some(point)).unwrap_err();
+    let err = train_from(&config(4), "none", &mut sim_env(&cfg), dir.path(), false, true, Some(point)).unwrap_err();
     let err = format!("{err:#}");
     assert!(err.contains("checkpoint") && err.contains("6 env replays for a batch of 4"), "{err}");
     assert_eq!(files(&dir.path().join("policy"), &[]), policy_before, "the finished policy is untouched");

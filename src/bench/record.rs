@@ -8,7 +8,8 @@
 //! `record_control_steps_per_s_rrd`, `record_mcap_cost` and `record_rrd_cost`
 //! (1 - with / without), and the same for the bare simulator (zero actions, no
 //! policy: the strictest ratio) as `record_sim_steps_per_s_*` and
-//! `record_sim_*_cost`. Skipped (null) without `policies/base-a1-flat`.
+//! `record_sim_*_cost`. Skipped (null) without `policies/base-a1-flat`. And what
+//! TensorBoard logging costs per training iteration (`tb_write_us_per_iteration`).
 
 use quadcl::record::{Recorder, RerunScene, RerunSink};
 use quadcl::rl::RobotViewer;
@@ -43,8 +44,38 @@ fn cost(with: f64, without: f64) -> serde_json::Value {
     json!(((1.0 - with / without) * 1000.0).round() / 1000.0)
 }
 
+/// What writing one iteration's metrics to TensorBoard and CSV costs (`quadcl train` and
+/// `quadcl run` do it every iteration): microseconds per iteration for the first row of the
+/// shipped base run's `metrics.jsonl` (every metric a PPO iteration logs), flushed every 25
+/// iterations as at checkpoints. Keys `tb_write_us_per_iteration`, `tb_scalars_per_iteration`.
+fn tensorboard_cost(seconds: f64, report: &mut serde_json::Map<String, serde_json::Value>) -> anyhow::Result<()> {
+    let rows = Path::new("policies/base-a1-flat-run/metrics.jsonl");
+    let Some(row) = std::fs::read_to_string(rows).ok().and_then(|t| t.lines().next().map(str::to_string)) else {
+        report.insert("tb_write_us_per_iteration".into(), json!(null));
+        return Ok(());
+    };
+    let metrics: quadcl::rl::Metrics = serde_json::from_str(&row)?;
+    let dir = std::env::temp_dir().join(format!("quadcl-bench-tb-{}", std::process::id()));
+    let mut log = quadcl::log::ScalarLog::create(&dir)?;
+    let mut step = 0i64;
+    let per_s = rate(seconds.min(2.0), || {
+        step += 1;
+        log.write(step, metrics.iter().map(|(k, v)| (k.as_str(), *v)))?;
+        if step % 25 == 0 {
+            log.flush()?;
+        }
+        Ok(())
+    })?;
+    drop(log);
+    let _ = std::fs::remove_dir_all(&dir);
+    report.insert("tb_write_us_per_iteration".into(), json!((1e7 / per_s).round() / 10.0));
+    report.insert("tb_scalars_per_iteration".into(), json!(metrics.len()));
+    Ok(())
+}
+
 /// Adds the recording figures to `report`.
 pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Value>) -> anyhow::Result<()> {
+    tensorboard_cost(seconds, report)?;
     let policy = Path::new("policies/base-a1-flat");
     if !policy.exists() {
         report.insert("record_control_steps_per_s_off".into(), json!(null));

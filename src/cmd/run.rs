@@ -10,7 +10,7 @@ pub struct RunArgs {
     /// Run file (TOML): experiment config, [method], [eval], [run] and the [[task]] sequence.
     #[arg(long)]
     pub config: PathBuf,
-    /// Output folder: metrics.json, checkpoints/, log.txt, run.toml.
+    /// Output folder: metrics.json, checkpoints/, log.txt, run.toml, tb/ (TensorBoard and CSV).
     #[arg(long)]
     pub out: PathBuf,
     /// Continue an interrupted run in --out from its last completed task.
@@ -26,6 +26,9 @@ pub struct RunArgs {
     /// (its settings still come from the file's [method.NAME] table). Give it again with --resume.
     #[arg(long)]
     pub method: Option<String>,
+    /// Write no TensorBoard events or CSV (DIR/tb/).
+    #[arg(long)]
+    pub no_tb: bool,
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
@@ -42,6 +45,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             stop_after: args.stop_after,
             record: args.record,
             method: args.method.clone(),
+            no_tensorboard: args.no_tb,
         },
     )?;
     let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));

@@ -1,6 +1,7 @@
 //! `quadcl train --config FILE --out DIR`: trains one task (default `none`,
 //! the unperturbed robot) with PPO + CENet and writes `config.toml`,
-//! `metrics.jsonl`, `summary.json` and `policy/` into DIR.
+//! `metrics.jsonl`, `summary.json`, `policy/` and `tb/` (TensorBoard events and a CSV of
+//! the same scalars; `--no-tb` leaves it out) into DIR.
 
 use clap::Args;
 use quadcl::config::Config;
@@ -34,6 +35,9 @@ pub struct TrainArgs {
     /// Train anew into an --out that already holds a training run, replacing its results.
     #[arg(long)]
     pub force: bool,
+    /// Write no TensorBoard events or CSV (DIR/tb/).
+    #[arg(long)]
+    pub no_tb: bool,
 }
 
 /// What in `out` says it holds a training run already.
@@ -68,7 +72,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     };
     let mut env = SimTrainEnv::new(&config.env, &task, config.ppo.num_envs, env_seed)?;
     let progress = std::io::stderr().is_terminal();
-    let summary = quadcl::rl::train_from(&config, &task_name, &mut env, &args.out, progress, resume)?;
+    let summary = quadcl::rl::train_from(&config, &task_name, &mut env, &args.out, progress, !args.no_tb, resume)?;
     let report = serde_json::json!({
         "task": task.to_string(),
         "iterations": summary.iterations,

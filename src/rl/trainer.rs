@@ -36,6 +36,7 @@ use super::ppo::PpoLearner;
 use super::progress::{iteration_summary, progress_bar, TrainingClock};
 use super::training_state::{TrainingState, TRAINING_STATE_FILE};
 use crate::config::Config;
+use crate::log::ScalarLog;
 use crate::util::{derive_seed, replace_dir, write_atomic, Stream};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
@@ -90,7 +91,8 @@ impl ResumePoint {
 }
 
 /// Trains a fresh agent on `env` for `config.ppo.iterations` iterations and
-/// writes the results into `out`. `progress`: show a progress bar on stderr.
+/// writes the results into `out` (TensorBoard events and CSV in `out/tb/` too). `progress`:
+/// show a progress bar on stderr.
 pub fn train(
     config: &Config,
     task: &str,
@@ -98,7 +100,7 @@ pub fn train(
     out: &Path,
     progress: bool,
 ) -> anyhow::Result<TrainSummary> {
-    train_from(config, task, env, out, progress, None)
+    train_from(config, task, env, out, progress, true, None)
 }
 
 /// Reads `out/checkpoint/` for `--resume`: the agent and where the run was.
@@ -179,7 +181,9 @@ fn save_checkpoint(
 }
 
 /// [`train`], or with `resume` (from [`load_resume_point`]) the same run
-/// continued from its checkpoint; `env` must be fresh (not stepped yet), and
+/// continued from its checkpoint; with `tensorboard`, every iteration's metrics also go
+/// to `out/tb/` as TensorBoard events and CSV ([`crate::log::ScalarLog`], step = the
+/// iteration, from 1, as `charts/iteration` counts); `env` must be fresh (not stepped yet), and
 /// for a checkpoint that is not exact ([`ResumePoint::is_exact`]) seeded with
 /// `derive_seed(config.seed, Stream::Trainer(iteration))`.
 pub fn train_from(
@@ -188,6 +192,7 @@ pub fn train_from(
     env: &mut dyn TrainEnv,
     out: &Path,
     progress: bool,
+    tensorboard: bool,
     resume: Option<ResumePoint>,
 ) -> anyhow::Result<TrainSummary> {
     let cfg = &config.ppo;
@@ -240,6 +245,12 @@ pub fn train_from(
         }
     };
     let first = done.as_ref().map_or(0, |s| s.iteration);
+    let tb_dir = out.join("tb");
+    let mut tb = match (tensorboard, first) {
+        (false, _) => None,
+        (true, 0) => Some(ScalarLog::create(&tb_dir)?),
+        (true, at) => Some(ScalarLog::resume(&tb_dir, at as i64 + 1)?),
+    };
 
     let bar = progress_bar(cfg.iterations, progress);
     bar.set_prefix(task.to_string());
@@ -266,12 +277,16 @@ pub fn train_from(
         summary.policy_s += m.get("time/policy_s").copied().unwrap_or(0.0);
         summary.update_s += m.get("time/update_s").copied().unwrap_or(0.0);
         log.append(&m)?;
+        if let Some(tb) = &mut tb {
+            tb.write(it as i64 + 1, m.iter().map(|(k, v)| (k.as_str(), *v)))?;
+        }
         let last = it + 1 == cfg.iterations;
         // The last iteration is checkpointed too (before the task ends), so a
         // finished run can be resumed with a larger `--iterations`.
         let checkpoint = cfg.checkpoint_every > 0 && ((it + 1) % cfg.checkpoint_every == 0 || last);
         if checkpoint {
             log.sync()?;
+            tb.as_mut().map(ScalarLog::flush).transpose()?;
             let state = TrainerState {
                 iteration: it + 1,
                 learning_rate: learner.optimizer.learning_rate(),
@@ -289,6 +304,7 @@ pub fn train_from(
     }
     bar.finish();
     log.sync()?;
+    tb.as_mut().map(ScalarLog::flush).transpose()?;
     learner.end_task()?;
     save_policy(&learner.agent, &[task.to_string()], &info_at(cfg.iterations), &out.join("policy"))?;
     summary.iterations = cfg.iterations;
