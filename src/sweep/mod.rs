@@ -13,10 +13,10 @@
 //! - `sweep.sbatch`, `slurm.json`: the array job script and the submitted jobs;
 //! - `collected.json`, `collected.md`: the collected table.
 //!
-//! One file per part: [`file`] (the sweep file), [`plan`] (cells and `sweep.json`),
-//! [`local`] (child processes here), [`slurm`] (array jobs), [`marker`] (what a
-//! local runner says about a cell), [`status`] (where every cell stands),
-//! [`bootstrap`] (means and intervals) and [`collect`] (the table).
+//! One file per part: [`file`](mod@file) (the sweep file), [`plan`](mod@plan) (cells and
+//! `sweep.json`), [`local`] (child processes here), [`slurm`] (array jobs), [`marker`] (what a
+//! local runner says about a cell), [`status`](mod@status) (where every cell stands),
+//! [`bootstrap`] (means and intervals) and [`collect`](mod@collect) (the table).
 
 pub mod bootstrap;
 pub mod collect;

@@ -88,14 +88,14 @@ fn table_lines(view: &SweepView, width: usize) -> Vec<Line<'static>> {
     let fixed = widths[0] + GAP + widths[1];
     let mut blocks: Vec<Vec<usize>> = vec![Vec::new()];
     let mut used = fixed;
-    for c in 2..head.len() {
+    for (c, w) in widths.iter().enumerate().skip(2) {
         let current = blocks.last_mut().expect("one block at least");
-        if !current.is_empty() && used + GAP + widths[c] > width {
+        if !current.is_empty() && used + GAP + w > width {
             blocks.push(vec![c]);
-            used = fixed + GAP + widths[c];
+            used = fixed + GAP + w;
         } else {
             current.push(c);
-            used += GAP + widths[c];
+            used += GAP + w;
         }
     }
     let text = |cells: &[String], columns: &[usize]| {
