@@ -86,8 +86,10 @@ pub fn status(dir: &Path, scheduler: bool) -> anyhow::Result<Vec<CellStatus>> {
         let run = RunMeasures::load(&dir.join(&cell.run))?;
         let completed = run.as_ref().map_or(0, |r| r.completed_steps);
         let total_steps = run.as_ref().map_or(cell.iterations.len(), |r| r.total_steps);
-        let mut done: usize = cell.iterations.iter().take(completed).sum();
-        let total: usize = cell.iterations.iter().sum();
+        // Saturating: the counts come from a file (sweep.json) that may have been edited.
+        let sum = |n: usize| cell.iterations.iter().take(n).fold(0usize, |a, b| a.saturating_add(*b));
+        let mut done = sum(completed);
+        let total = sum(usize::MAX);
         let queued = queue.as_ref().and_then(|q| q.get(&cell.index)).map(String::as_str);
         let accounted = accounting.as_ref().and_then(|a| a.get(&cell.index)).map(String::as_str);
         let marker = read_marker(dir, cell.index);
@@ -115,7 +117,7 @@ pub fn status(dir: &Path, scheduler: bool) -> anyhow::Result<Vec<CellStatus>> {
         if state == CellState::Running {
             if let Some((step, iteration)) = last_iteration(&dir.join(LOGS_DIR).join(format!("{}.log", cell.index))) {
                 if step == completed {
-                    done += iteration.min(cell.iterations.get(step).copied().unwrap_or(0));
+                    done = done.saturating_add(iteration.min(cell.iterations.get(step).copied().unwrap_or(0)));
                 }
             }
         }
