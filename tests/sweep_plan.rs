@@ -40,6 +40,16 @@ fn a_two_by_two_sweep_plans_four_named_cells_each_a_valid_run_file() {
         assert_eq!(cell.iterations, vec![3, 3, 3]);
     }
     assert_eq!(Plan::load(&out).unwrap(), p);
+    // A cell's run file edited after planning is refused before anything runs (local or Slurm).
+    p.check_cells(&out).unwrap();
+    let cell0 = out.join(&p.cells[0].config);
+    let edited = std::fs::read_to_string(&cell0).unwrap().replace("seed = 1", "seed = 9");
+    std::fs::write(&cell0, &edited).unwrap();
+    let err = format!("{:#}", p.check_cells(&out).unwrap_err());
+    assert!(err.contains("cells/0.toml") && err.contains("changed since the sweep was planned"), "{err}");
+    let err = format!("{:#}", quadcl::sweep::write_sbatch(&out, &Default::default()).unwrap_err());
+    assert!(err.contains("changed since the sweep was planned"), "{err}");
+    std::fs::write(&cell0, std::fs::read_to_string(&cell0).unwrap().replace("seed = 9", "seed = 1")).unwrap();
     // Planning the same sweep again keeps the folder; another sweep is refused.
     assert_eq!(plan(&file, &out).unwrap(), p);
     let other = sweep_file(tmp.path(), "seed = [1, 2, 3]\n");

@@ -16,8 +16,6 @@ use super::marker::{hostname, read_marker, write_marker, Marker};
 use super::plan::{Cell, Plan};
 use super::status::cell_finished;
 use super::LOGS_DIR;
-use crate::engine::RunConfig;
-use crate::util::sha256_hex;
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -57,22 +55,6 @@ pub struct LocalReport {
     pub running_elsewhere: Vec<usize>,
 }
 
-/// Checks every cell's run file: the one planned (same hash) and a valid run file.
-pub fn check_cells(dir: &Path, plan: &Plan) -> anyhow::Result<()> {
-    for cell in &plan.cells {
-        let path = dir.join(&cell.config);
-        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-        anyhow::ensure!(
-            sha256_hex(text.as_bytes()) == cell.run_file_sha256,
-            "{}: changed since the sweep was planned (its sha256 is not the one in sweep.json): plan again into \
-             another folder",
-            path.display()
-        );
-        RunConfig::load_text(&path, &text)?;
-    }
-    Ok(())
-}
-
 /// A cell being trained.
 struct Running {
     index: usize,
@@ -84,7 +66,7 @@ struct Running {
 pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) -> anyhow::Result<LocalReport> {
     let dir = std::path::absolute(dir).with_context(|| format!("{}: no absolute path", dir.display()))?;
     let plan = Plan::load(&dir)?;
-    check_cells(&dir, &plan)?;
+    plan.check_cells(&dir)?;
     std::fs::create_dir_all(dir.join(LOGS_DIR))
         .with_context(|| format!("creating {}", dir.join(LOGS_DIR).display()))?;
     let mut report = LocalReport::default();

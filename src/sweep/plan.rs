@@ -102,6 +102,23 @@ impl Plan {
         groups
     }
 
+    /// Checks every cell's run file in the sweep folder `dir` before anything runs: the one
+    /// planned (the hash `sweep.json` records) and a valid run file; errors name the file.
+    pub fn check_cells(&self, dir: &Path) -> anyhow::Result<()> {
+        for cell in &self.cells {
+            let path = dir.join(&cell.config);
+            let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+            anyhow::ensure!(
+                sha256_hex(text.as_bytes()) == cell.run_file_sha256,
+                "{}: changed since the sweep was planned (its sha256 is not the one in sweep.json): plan again \
+                 into another folder",
+                path.display()
+            );
+            RunConfig::load_text(&path, &text)?;
+        }
+        Ok(())
+    }
+
     /// The seed of cell `index` (its `seed` axis value), if the sweep has a seed axis.
     pub fn seed_of(&self, index: usize) -> Option<&serde_json::Value> {
         self.cells.get(index)?.values.get(SEED_AXIS)

@@ -134,6 +134,7 @@ pub fn sbatch_script(dir: &Path, cells: &[usize], options: &SlurmOptions) -> any
 pub fn write_sbatch(dir: &Path, options: &SlurmOptions) -> anyhow::Result<(PathBuf, Vec<usize>)> {
     let dir = std::path::absolute(dir).with_context(|| format!("{}: no absolute path", dir.display()))?;
     let plan = Plan::load(&dir)?;
+    plan.check_cells(&dir)?;
     let cells: Vec<usize> = plan.cells.iter().filter(|c| !cell_finished(&dir, c)).map(|c| c.index).collect();
     let script = sbatch_script(&dir, &cells, options)?;
     std::fs::create_dir_all(dir.join(LOGS_DIR))
