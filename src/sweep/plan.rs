@@ -133,6 +133,17 @@ struct PlannedCell {
 
 /// Plans the sweep file `file` into the folder `out` (see the module doc); returns the plan.
 pub fn plan(file: &Path, out: &Path) -> anyhow::Result<Plan> {
+    let (plan, planned) = prepare(file)?;
+    write_plan(out, &plan, &planned)
+}
+
+/// Plans the sweep file `file` and checks every cell without writing anything.
+pub fn check(file: &Path) -> anyhow::Result<Plan> {
+    Ok(prepare(file)?.0)
+}
+
+/// The plan of `file` and its cells' run files, every value checked.
+fn prepare(file: &Path) -> anyhow::Result<(Plan, Vec<PlannedCell>)> {
     let sweep = SweepFile::load(file)?;
     let shown = file.display();
     let base_text = std::fs::read_to_string(&sweep.base)
@@ -170,7 +181,7 @@ pub fn plan(file: &Path, out: &Path) -> anyhow::Result<Plan> {
         cells: planned.iter().map(|p| p.cell.clone()).collect(),
         provenance: Provenance::of_this_build(None),
     };
-    write_plan(out, &plan, &planned)
+    Ok((plan, planned))
 }
 
 /// Writes the cells' run files and `sweep.json` into `out`, unless it already holds this plan.
