@@ -38,6 +38,8 @@ pub enum Command {
     Robot(crate::cmd::robot::RobotArgs),
     /// Sim-to-real fine-tuning of one learned task on a shifted environment (its private parameters only).
     Finetune(crate::cmd::finetune::FinetuneArgs),
+    /// Grids of runs (methods x seeds x settings): plan, run here or on Slurm, status, collect with intervals.
+    Sweep(crate::cmd::sweep::SweepArgs),
 }
 
 /// Runs the chosen subcommand. Without one, opens the workbench (or, without a terminal, says what to run).
@@ -54,6 +56,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Record(args)) => crate::cmd::record::run(args),
         Some(Command::View(args)) => crate::cmd::view::run(args),
         Some(Command::Robot(args)) => crate::cmd::robot::run(args),
+        Some(Command::Sweep(args)) => crate::cmd::sweep::run(args),
         None => crate::cmd::tui::run(crate::cmd::tui::TuiArgs::default()),
     }
 }

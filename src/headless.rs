@@ -117,7 +117,8 @@ impl Observer for TensorBoardObserver {
 /// How a headless run goes.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
-    /// Continue the run already in the output folder from its last completed task.
+    /// Continue the run already in the output folder from its last completed task (or start
+    /// it, when the folder holds none yet).
     pub resume: bool,
     /// Show a progress bar on stderr.
     pub progress: bool,
@@ -135,7 +136,9 @@ pub struct RunOptions {
 /// Every check (config, existing results, checkpoint) happens before anything is written.
 pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<MetricsFile> {
     let RunOptions { resume, progress, stop_after, record, method, no_tensorboard } = options;
-    let mode = if resume { OpenMode::Resume } else { OpenMode::New };
+    // A folder that holds no run yet (never started, or killed before its first record) starts
+    // it: a Slurm array task or a sweep cell is always started with --resume.
+    let mode = if resume { OpenMode::ResumeOrNew } else { OpenMode::New };
     let mut runner = Runner::open_with_method(config, out, mode, !progress, method.as_deref())?;
     runner.record_episodes(record)?;
     let session = runner.session();

@@ -17,7 +17,8 @@
 //! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl`, `record`, `log` |
 //! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine`, `record`, `log` |
 //! | [`record`] | recorders of simulation steps: episodes as MCAP for Foxglove and as Rerun `.rrd` or a live Rerun viewer (`quadcl record`, `quadcl view`) | `util`, `config`, `sim`, `nn`, `rl` |
-//! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record` |
+//! | [`sweep`] | grids of runs: a sweep file planned into cells, run here (child processes) or as a Slurm array job, status, collected with bootstrap intervals over seeds | `util`, `engine` |
+//! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread, the Sweep screen | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record`, `sweep` |
 //!
 //! `engine` imports `sim` for what only a simulator-backed learner needs (the
 //! task perturbations it trains on, the shifted environments of sim-to-real
@@ -40,5 +41,6 @@ pub mod nn;
 pub mod record;
 pub mod rl;
 pub mod sim;
+pub mod sweep;
 pub mod tui;
 pub mod util;

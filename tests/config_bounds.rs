@@ -76,7 +76,10 @@ fn every_shipped_config_and_run_file_still_loads() {
     let (mut configs, mut runs) = (0, 0);
     for path in &files {
         let text = std::fs::read_to_string(path).unwrap();
-        if text.lines().any(|l| l.trim() == "[[task]]") {
+        if text.lines().any(|l| l.trim() == "[axes]") {
+            // A sweep file: every cell of it is a run file that loads.
+            quadcl::sweep::plan::check(path).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
+        } else if text.lines().any(|l| l.trim() == "[[task]]") {
             quadcl::engine::RunConfig::load(path).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
             runs += 1;
         } else {

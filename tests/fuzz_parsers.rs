@@ -292,3 +292,42 @@ fn fuzz_training_checkpoints() {
         let _ = quadcl::rl::load_policy_or_checkpoint(&copy);
     });
 }
+
+#[test]
+fn fuzz_sweep_files() {
+    let seeds = corpus(".toml");
+    let base: toml::Value =
+        toml::from_str(&std::fs::read_to_string(root().join("scenes/smoke.toml")).unwrap()).unwrap();
+    let tokens: Vec<&str> =
+        TOML_TOKENS.iter().copied().chain(["base = \"smoke.toml\"\n", "[axes]\n", "\"task.0.", "."]).collect();
+    fuzz("sweep-file", &seeds, &tokens, |input| {
+        if let Ok(sweep) = quadcl::sweep::SweepFile::parse(Path::new("/nonexistent/sweep.toml"), &text(input)) {
+            for axis in &sweep.axes {
+                for value in &axis.values {
+                    let mut run = base.clone();
+                    let _ = quadcl::sweep::file::set_dotted(&mut run, &axis.key, value.clone());
+                }
+            }
+        }
+    });
+}
+
+#[test]
+fn fuzz_sweep_plans() {
+    // The fixture's sweep.json, mutated, read back by status and collect over its run folders.
+    let fixture = root().join("tests/sweep_fixture");
+    let dir = tempfile::tempdir().unwrap();
+    for i in 0..6 {
+        let run = dir.path().join(format!("runs/{i}"));
+        std::fs::create_dir_all(&run).unwrap();
+        std::fs::copy(fixture.join(format!("runs/{i}/metrics.json")), run.join("metrics.json")).unwrap();
+    }
+    let plan = std::fs::read(fixture.join("sweep.json")).unwrap();
+    let tokens =
+        &["{", "}", "[", "]", "\"", ",", ":", "0", "-1", "1e308", "null", "18446744073709551615", "\"runs/0\""];
+    fuzz("sweep-plan", std::slice::from_ref(&plan), tokens, |input| {
+        std::fs::write(dir.path().join("sweep.json"), input).unwrap();
+        let _ = quadcl::sweep::status(dir.path(), false);
+        let _ = quadcl::sweep::collect(dir.path());
+    });
+}

@@ -233,3 +233,23 @@ fn a_manifest_edited_after_it_was_written_is_an_error_not_a_different_policy() {
     edit_manifest(dir.path(), |_| {});
     load_policy(dir.path()).unwrap();
 }
+
+#[test]
+fn a_stamped_provenance_reads_back_and_leaves_the_policy_loadable_and_its_tensors_unchanged() {
+    use quadcl::nn::checkpoint::{read_provenance, write_provenance};
+    let dir = tempfile::tempdir().unwrap();
+    trained_policy(dir.path());
+    assert_eq!(read_provenance(dir.path()).unwrap(), None, "a policy written before provenance has none");
+    let model = std::fs::read(dir.path().join(MODEL_FILE)).unwrap();
+    let provenance = quadcl::util::Provenance::of_this_build(Some(b"seed = 11\n"));
+    write_provenance(dir.path(), &provenance).unwrap();
+    assert_eq!(read_provenance(dir.path()).unwrap(), Some(provenance));
+    // Outside the manifest's content digest: the policy still loads, its tensor file untouched.
+    assert_eq!(load_policy(dir.path()).unwrap().tasks.len(), 3);
+    assert_eq!(std::fs::read(dir.path().join(MODEL_FILE)).unwrap(), model);
+    // Any other edit of the manifest is still refused.
+    let path = dir.path().join(MANIFEST_FILE);
+    let edited = std::fs::read_to_string(&path).unwrap().replace("crash:FL", "crash:FR");
+    std::fs::write(&path, edited).unwrap();
+    assert!(load_error(dir.path()).contains("changed after it was written"));
+}

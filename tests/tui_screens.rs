@@ -3,7 +3,8 @@
 //! ratatui's TestBackend and snapshotted (in `snapshots/`): the first screen
 //! at 120x40 and 80x24 with the masks of `crash:FL`, the evaluation matrix,
 //! the next-task controls, the help overlay, the robot panel with a
-//! simulated frame, and what a resize to too small a terminal shows.
+//! simulated frame, and what a resize to too small a terminal shows. The
+//! Sweep screen on the committed sweep fixture (`tests/sweep_fixture`).
 
 mod tui_common;
 use quadcl::tui::{Action, Screen, WorkerMsg};
@@ -105,4 +106,24 @@ fn a_resize_below_80x24_says_so_and_a_resize_back_redraws_everything() {
     let text = format!("{:?}", terminal.backend().buffer());
     assert!(!text.contains("needs at least") && text.contains("Sequence") && text.contains("Masks"), "{text}");
     assert_eq!(app.size, (80, 24));
+}
+
+#[test]
+fn the_sweep_screen_shows_every_cell_and_the_collected_table() {
+    use quadcl::tui::{SweepAction, SweepView};
+    let dir = std::path::PathBuf::from("tests/sweep_fixture");
+    let mut view = SweepView::new(dir.clone(), (120, 40));
+    let read = quadcl::tui::sweep_view::snapshot(&root().join(&dir), false);
+    view.update(SweepAction::Refresh(Box::new(read)));
+    assert!(view.error.is_none(), "{:?}", view.error);
+    let text = tui_common::sweep_screen(&view, 120, 40);
+    assert!(text.contains("5 finished, 1 stopped") && text.contains("0.500 [0.400, 0.600]"), "{text}");
+    snap!("sweep_fixture_120x40", text);
+    snap!("sweep_fixture_80x24", tui_common::sweep_screen(&view, 80, 24));
+    // Enter on the stopped cell asks for its run to be opened in the workbench.
+    for _ in 0..5 {
+        view.update(SweepAction::Down);
+    }
+    view.update(SweepAction::Open);
+    assert_eq!(view.open, Some(dir.join("runs/5")));
 }

@@ -8,6 +8,7 @@ pub mod masks;
 pub mod record;
 pub mod robot;
 pub mod run;
+pub mod sweep;
 pub mod train;
 pub mod tui;
 pub mod view;

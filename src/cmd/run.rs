@@ -13,7 +13,7 @@ pub struct RunArgs {
     /// Output folder: metrics.json, checkpoints/, log.txt, run.toml, tb/ (TensorBoard and CSV).
     #[arg(long)]
     pub out: PathBuf,
-    /// Continue an interrupted run in --out from its last completed task.
+    /// Continue an interrupted run in --out from its last completed task (a folder that holds no run yet starts it).
     #[arg(long)]
     pub resume: bool,
     /// Stop after this many completed tasks (continue later with --resume).

@@ -1,5 +1,5 @@
 //! `quadcl tui [--run DIR] [--config FILE] [--continues DIR]` (and `quadcl`
-//! alone): opens the workbench. Without options it opens `runs/workbench`,
+//! alone): opens the workbench; `quadcl tui --sweep DIR` opens a sweep's Sweep screen. Without options it opens `runs/workbench`,
 //! which on first use continues the shipped 4-task run `policies/sequence-a1-adapter`
 //! with the rest of the default 12-task sequence `scenes/sequence-a1.toml`.
 //! Without a terminal it says what to run instead.
@@ -27,6 +27,9 @@ pub struct TuiArgs {
     /// A finished shorter run whose steps begin --config's sequence: a new folder continues it.
     #[arg(long)]
     pub continues: Option<PathBuf>,
+    /// A sweep folder (`quadcl sweep plan`): its cells with status and progress, the collected table; Enter opens a cell's run.
+    #[arg(long, conflicts_with_all = ["run", "config", "continues"])]
+    pub sweep: Option<PathBuf>,
 }
 
 /// The run the options name (the defaults when none is given).
@@ -44,7 +47,16 @@ pub fn spec(args: TuiArgs) -> OpenSpec {
 }
 
 pub fn run(args: TuiArgs) -> anyhow::Result<()> {
-    if !(std::io::stdout().is_terminal() && std::io::stdin().is_terminal()) {
+    let terminal = std::io::stdout().is_terminal() && std::io::stdin().is_terminal();
+    if let Some(dir) = args.sweep {
+        anyhow::ensure!(
+            terminal,
+            "the Sweep screen needs a terminal: without one, `quadcl sweep status {}` prints where the cells stand",
+            dir.display()
+        );
+        return quadcl::tui::run_sweep(dir);
+    }
+    if !terminal {
         crate::cmd::welcome::run();
         return Ok(());
     }

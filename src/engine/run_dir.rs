@@ -1,7 +1,8 @@
 //! A run's output folder (`quadcl run --out DIR`):
 //!
 //! - `run.toml`: a copy of the run file (a resumed run must match it);
-//! - `metrics.json`: the measures and everything needed to resume (see [`MetricsFile`]);
+//! - `metrics.json`: the measures and everything needed to resume (see [`MetricsFile`]), and
+//!   the provenance (build, run file hash, cores);
 //! - `checkpoints/step-NN-TASK/`: the learner after each completed step (a policy directory);
 //! - `log.txt`: one line per task start/end and evaluation;
 //! - `episodes/step-NN-TASK/T.mcap`: with `--record mcap`, an evaluation episode of every
@@ -16,7 +17,7 @@
 use super::learner::{Evaluation, Learner};
 use super::results::{SessionResults, StepRecord, Summary, TaskCurve};
 use crate::cl::EvalMatrix;
-use crate::util::{replace_dir, write_atomic};
+use crate::util::{replace_dir, write_atomic, Provenance};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -55,6 +56,10 @@ pub struct MetricsFile {
     pub evaluations: Vec<Vec<Evaluation>>,
     /// Per step, the training curves.
     pub curves: Vec<TaskCurve>,
+    /// The build, run file and machine that wrote the file (absent from runs written before
+    /// it was recorded). Not a result: a run resumed elsewhere has the same numbers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
 }
 
 impl MetricsFile {
@@ -71,6 +76,7 @@ impl MetricsFile {
             steps: results.steps.clone(),
             evaluations: results.evaluations.clone(),
             curves: results.curves.clone(),
+            provenance: None,
         }
     }
 
@@ -142,15 +148,20 @@ impl RunDir {
     }
 
     /// Writes the checkpoint of step `step` (training `task`) as a whole
-    /// (see [`replace_dir`]): the learner's state with the sequence's task names.
+    /// (see [`replace_dir`]): the learner's state with the sequence's task names, its
+    /// manifest stamped with `provenance`.
     pub fn write_checkpoint(
         &self,
         step: usize,
         task: &str,
         learner: &dyn Learner,
         tasks: &[String],
+        provenance: &Provenance,
     ) -> anyhow::Result<()> {
-        replace_dir(&self.checkpoint(step, task), |dir| learner.save(dir, tasks))
+        replace_dir(&self.checkpoint(step, task), |dir| {
+            learner.save(dir, tasks)?;
+            crate::nn::checkpoint::write_provenance(dir, provenance)
+        })
     }
 
     /// Writes `metrics.json` atomically.

@@ -21,7 +21,7 @@ use super::session::{ChosenSettings, Session, StepOutcome};
 use super::toy_learner::ToyLearner;
 use crate::cl::TaskSpec;
 use crate::record::{record_episodes, RecordFormat, RecordOptions};
-use crate::util::{replace_dir, write_atomic};
+use crate::util::{replace_dir, write_atomic, Provenance};
 use anyhow::Context;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -303,7 +303,14 @@ impl Runner {
     /// `metrics.json` as it stands.
     pub fn metrics(&self) -> MetricsFile {
         let reference = |name: &str| self.session.reference_curve(name);
-        MetricsFile::new(self.session.results(), self.session.sequence().tasks.len(), &reference)
+        let mut metrics = MetricsFile::new(self.session.results(), self.session.sequence().tasks.len(), &reference);
+        metrics.provenance = Some(self.provenance());
+        metrics
+    }
+
+    /// This build and machine, with the hash of the run file as the folder's `run.toml` holds it.
+    pub fn provenance(&self) -> Provenance {
+        Provenance::of_this_build(Some(self.run_text.as_bytes()))
     }
 
     fn log_text(&self) -> String {
@@ -337,7 +344,7 @@ impl Runner {
     fn after_task(&mut self, step: usize) -> anyhow::Result<()> {
         let results = self.session.results();
         let name = &results.steps[step].name;
-        self.dir.write_checkpoint(step, name, self.session.learner(), &results.tasks)?;
+        self.dir.write_checkpoint(step, name, self.session.learner(), &results.tasks, &self.provenance())?;
         self.save()?;
         if let Some(format) = self.record {
             self.record_step(step, format)?;

@@ -13,7 +13,8 @@
 //!   mask settings, layer shapes, task in progress), the run's config, and
 //!   the sha256 of both tensor files; `model.safetensors`' metadata holds the
 //!   sha256 of the rest of the manifest (`manifest_digest`), so an edited
-//!   manifest is refused.
+//!   manifest is refused; `provenance` (which build, run file and machine wrote
+//!   it) is stamped afterwards by `write_provenance`, outside that digest.
 //!
 //! Dense networks (the baselines' shared trunk and per-task heads) are
 //! described in `checkpoint/dense.rs`.
@@ -37,7 +38,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 mod dense;
+mod provenance;
 pub(crate) mod tensors;
+
+pub use provenance::{read_provenance, write_provenance, PROVENANCE_KEY};
 
 use tensors::{f32_raw, serialize, Raw, Reader};
 

@@ -1,6 +1,7 @@
 //! The manifest bound to the weights: `model.safetensors` carries, in its
 //! safetensors metadata, the sha256 of the manifest's content (everything but
-//! the tensor-file hashes, which cannot include themselves). A manifest edited
+//! the tensor-file hashes, which cannot include themselves, and the provenance,
+//! stamped after the policy is written). A manifest edited
 //! after it was written (task names, sizes, mask settings, the config) no
 //! longer matches, and loading it is an error rather than a silently
 //! different policy. Files written before the digest existed carry none and
@@ -13,11 +14,14 @@ use std::path::Path;
 /// The metadata key of the digest in `model.safetensors`.
 pub(super) const METADATA_KEY: &str = "quadcl.manifest_sha256";
 
-/// The digest of a manifest given as JSON: its canonical text without `files`.
+/// The digest of a manifest given as JSON: its canonical text without `files` and without
+/// `provenance` (which build and machine wrote it: the same policy made elsewhere has the
+/// same digest and byte-identical tensor files).
 pub(super) fn manifest_digest(manifest: &serde_json::Value) -> String {
     let mut body = manifest.clone();
     if let Some(map) = body.as_object_mut() {
         map.remove("files");
+        map.remove(super::checkpoint::PROVENANCE_KEY);
     }
     crate::util::sha256_hex(body.to_string().as_bytes())
 }

@@ -175,6 +175,7 @@ fn save_checkpoint(
     let state = TrainerState { training_state_sha256: Some(crate::util::sha256_hex(&training)), ..state.clone() };
     replace_dir(&out.join("checkpoint"), |dir| {
         save_policy(&learner.agent, &[task.to_string()], info, dir)?;
+        crate::nn::checkpoint::write_provenance(dir, &crate::util::Provenance::of_this_build(None))?;
         write_atomic(&dir.join(TRAINING_STATE_FILE), &training)?;
         write_atomic(&dir.join("trainer.json"), serde_json::to_string_pretty(&state)?.as_bytes())
     })
@@ -307,6 +308,7 @@ pub fn train_from(
     tb.as_mut().map(ScalarLog::flush).transpose()?;
     learner.end_task()?;
     save_policy(&learner.agent, &[task.to_string()], &info_at(cfg.iterations), &out.join("policy"))?;
+    crate::nn::checkpoint::write_provenance(&out.join("policy"), &crate::util::Provenance::of_this_build(None))?;
     summary.iterations = cfg.iterations;
     summary.env_steps = clock.env_steps();
     summary.wall_s = clock.wall_s();

@@ -2,7 +2,9 @@
 //! `update(Action)`, `events` what the engine's events do to it, `timeline`
 //! and `next_task` the state of those two panels; `input` turns keys into
 //! actions; `ui` lays out and `panels/` draw; `worker` runs the session (and
-//! the robot view, and recordings) on threads of their own.
+//! the robot view, and recordings) on threads of their own. `sweep_view` and
+//! `sweep_loop` are the Sweep screen (`quadcl tui --sweep DIR`): a sweep's
+//! cells and collected table, whose cells open in the workbench.
 //! [`run_app`] takes its backend and its event source, so tests drive the real
 //! loop on ratatui's `TestBackend` with scripted events; [`run`] opens the
 //! terminal (raw mode, alternate screen, mouse capture) and restores it on
@@ -13,18 +15,24 @@ mod events;
 pub mod input;
 pub mod next_task;
 pub mod panels;
+pub mod sweep_loop;
+pub mod sweep_view;
 pub mod timeline;
 pub mod ui;
 pub mod worker;
 
 pub use app::{Action, App, Clock, Outgoing, Panel, Screen};
+pub use sweep_loop::{run_sweep_app, SweepReader};
+pub use sweep_view::{SweepAction, SweepSnapshot, SweepView};
 pub use worker::{OpenSpec, Opened, Worker, WorkerMsg};
 
 use ratatui::backend::Backend;
+use ratatui::backend::CrosstermBackend;
 use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture, Event};
 use ratatui::crossterm::execute;
 use ratatui::crossterm::terminal::{disable_raw_mode, enable_raw_mode, EnterAlternateScreen, LeaveAlternateScreen};
 use ratatui::Terminal;
+use std::io::Stdout;
 use std::time::Duration;
 
 /// About 30 frames per second: the longest wait for input between frames.
@@ -150,8 +158,11 @@ impl Drop for TerminalGuard {
     }
 }
 
-/// Opens the workbench on the terminal for the run `spec` names.
-pub fn run(spec: OpenSpec) -> anyhow::Result<()> {
+/// The terminal in raw mode on the alternate screen with the mouse captured, restored on every
+/// exit path of `body` (a panic included).
+fn with_terminal(
+    body: impl FnOnce(&mut Terminal<CrosstermBackend<Stdout>>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
     let previous = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         restore_terminal();
@@ -160,9 +171,38 @@ pub fn run(spec: OpenSpec) -> anyhow::Result<()> {
     enable_raw_mode()?;
     let _guard = TerminalGuard;
     execute!(std::io::stdout(), EnterAlternateScreen, EnableMouseCapture)?;
-    let mut terminal = Terminal::new(ratatui::backend::CrosstermBackend::new(std::io::stdout()))?;
+    let mut terminal = Terminal::new(CrosstermBackend::new(std::io::stdout()))?;
+    body(&mut terminal)
+}
+
+/// The workbench on `terminal` for the run `spec` names, until the user quits.
+fn workbench<B: Backend>(terminal: &mut Terminal<B>, events: &mut dyn EventSource, spec: OpenSpec) -> anyhow::Result<()>
+where
+    B::Error: Send + Sync + 'static,
+{
     let size = terminal.size()?;
     let mut app = App::new(spec.run_dir.clone(), (size.width, size.height), Clock::Real(std::time::Instant::now()));
     let mut worker = Worker::spawn(spec);
-    run_app(&mut terminal, &mut app, &mut worker, &mut TerminalEvents)
+    run_app(terminal, &mut app, &mut worker, events)
+}
+
+/// Opens the workbench on the terminal for the run `spec` names.
+pub fn run(spec: OpenSpec) -> anyhow::Result<()> {
+    with_terminal(|terminal| workbench(terminal, &mut TerminalEvents, spec))
+}
+
+/// Opens the Sweep screen on the terminal for the sweep folder `dir`; Enter on a cell opens
+/// its run in the workbench, and quitting that comes back.
+pub fn run_sweep(dir: std::path::PathBuf) -> anyhow::Result<()> {
+    // Checked before the terminal changes: a folder without a plan is an error on stderr.
+    crate::sweep::Plan::load(&dir)?;
+    with_terminal(|terminal| {
+        let size = terminal.size()?;
+        let mut view = SweepView::new(dir.clone(), (size.width, size.height));
+        let reader = SweepReader::spawn(&dir, true);
+        let mut open = |t: &mut Terminal<CrosstermBackend<Stdout>>, events: &mut dyn EventSource, run| {
+            workbench(t, events, OpenSpec { run_dir: run, config: None, continues: None })
+        };
+        run_sweep_app(terminal, &mut view, &reader, &mut TerminalEvents, &mut open)
+    })
 }

@@ -1,13 +1,16 @@
 //! The base layer every other module may use (it imports none of them):
 //! atomic writes ([`write_atomic`], [`replace_dir`]), content hashes
 //! ([`sha256_hex`]), the derivation of every random stream ([`derive_seed`]),
-//! and a stream's exact position for checkpoints ([`RngState`]).
+//! a stream's exact position for checkpoints ([`RngState`]), and where a result
+//! came from ([`Provenance`]).
 
 mod fs;
+mod provenance;
 mod rng_state;
 mod seed;
 
 pub use fs::{recover_replaced_dir, replace_dir, write_atomic};
+pub use provenance::Provenance;
 pub use rng_state::{RngState, RNG_STATE_BYTES};
 pub use seed::{derive_seed, Stream};
 

@@ -31,6 +31,9 @@ pub enum Stream {
     Sim2RealTrain,
     /// Sim-to-real fine-tuning's evaluation of task `task`, before and after. Derived from its `--seed`.
     Sim2RealEval(usize),
+    /// The resampling of seeds behind a sweep's bootstrap intervals (`quadcl sweep collect`).
+    /// Derived from a fixed seed, so a collected table is the same every time.
+    Bootstrap,
 }
 
 /// The seed of `stream`, derived from `seed` (the master seed or the seed the
@@ -47,6 +50,7 @@ pub fn derive_seed(seed: u64, stream: Stream) -> u64 {
         Stream::StepEnvs => mix(seed, 10, 0),
         Stream::Sim2RealTrain => mix(seed, 20, 0),
         Stream::Sim2RealEval(task) => mix(seed, 21, task as u64),
+        Stream::Bootstrap => mix(seed, 30, 0),
     }
 }
 
@@ -81,6 +85,7 @@ mod tests {
             Stream::RandomRelated,
             Stream::Sim2RealTrain,
             Stream::Sim2RealEval(0),
+            Stream::Bootstrap,
         ];
         let seeds: Vec<u64> = streams.iter().map(|&s| derive_seed(7, s)).collect();
         for (i, a) in seeds.iter().enumerate() {

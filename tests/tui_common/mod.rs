@@ -82,6 +82,13 @@ pub fn panel(
     text(&terminal, width, height, hide)
 }
 
+/// The Sweep screen as text at `width` x `height`.
+pub fn sweep_screen(view: &quadcl::tui::SweepView, width: u16, height: u16) -> String {
+    let mut terminal = Terminal::new(TestBackend::new(width, height)).unwrap();
+    terminal.draw(|f| quadcl::tui::panels::sweep::draw(f, view)).unwrap();
+    text(&terminal, width, height, Path::new("\0"))
+}
+
 fn text(terminal: &Terminal<TestBackend>, width: u16, height: u16, hide: &Path) -> String {
     let buffer = terminal.backend().buffer();
     let mut text = String::new();

@@ -6,6 +6,7 @@ pub mod help;
 pub mod masks;
 pub mod matrix;
 pub mod robot;
+pub mod sweep;
 pub mod timeline;
 pub mod training;
 

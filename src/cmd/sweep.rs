@@ -1,0 +1,178 @@
+//! `quadcl sweep plan|local|slurm|status|collect`: grids of runs (see the
+//! library's `sweep` module for the folder they share).
+//!
+//! ```text
+//! quadcl sweep plan scenes/sweep-smoke.toml --out runs/sweep-smoke
+//! quadcl sweep local runs/sweep-smoke --jobs 2
+//! quadcl sweep slurm runs/sweep-smoke --time 02:00:00 --cpus-per-task 4 --submit
+//! quadcl sweep status runs/sweep-smoke
+//! quadcl sweep collect runs/sweep-smoke
+//! ```
+
+use clap::{Args, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    #[command(subcommand)]
+    pub command: SweepCommand,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum SweepCommand {
+    /// Expand a sweep file into one run file per cell (DIR/cells/I.toml) and DIR/sweep.json, every cell checked.
+    Plan(PlanArgs),
+    /// Train every cell that has not finished on this machine (resuming stopped ones), N at a time.
+    Local(LocalArgs),
+    /// Write DIR/sweep.sbatch, a Slurm array job of the unfinished cells, and submit it with --submit.
+    Slurm(SlurmArgs),
+    /// Where every cell stands: pending, queued, running (with progress), stopped, failed, finished.
+    Status(StatusArgs),
+    /// Per group of cells that differ only in seed: means with 90 % bootstrap intervals (DIR/collected.md, .json).
+    Collect(CollectArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// The sweep file (TOML): `base = "RUN_FILE"` and an [axes] table of run file keys and their values.
+    pub file: PathBuf,
+    /// The sweep folder to plan into.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct LocalArgs {
+    /// The sweep folder (from `quadcl sweep plan`).
+    pub dir: PathBuf,
+    /// Cells trained at the same time.
+    #[arg(long, default_value_t = 1)]
+    pub jobs: usize,
+    /// Worker threads per cell (default: the cores shared among the jobs).
+    #[arg(long)]
+    pub threads_per_job: Option<usize>,
+}
+
+#[derive(Debug, Args)]
+pub struct SlurmArgs {
+    /// The sweep folder (from `quadcl sweep plan`), on a file system the nodes share.
+    pub dir: PathBuf,
+    /// Slurm partition.
+    #[arg(long)]
+    pub partition: Option<String>,
+    /// Time limit per cell (HH:MM:SS).
+    #[arg(long)]
+    pub time: Option<String>,
+    /// CPUs per cell (its RAYON_NUM_THREADS).
+    #[arg(long, default_value_t = 1)]
+    pub cpus_per_task: usize,
+    /// Memory per cell (4G, 4000M).
+    #[arg(long)]
+    pub mem: Option<String>,
+    /// The quadcl binary the nodes run (default: this one).
+    #[arg(long)]
+    pub quadcl: Option<PathBuf>,
+    /// Submit the script with sbatch (and record the job in DIR/slurm.json).
+    #[arg(long)]
+    pub submit: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct StatusArgs {
+    /// The sweep folder.
+    pub dir: PathBuf,
+    /// Print the cells as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct CollectArgs {
+    /// The sweep folder.
+    pub dir: PathBuf,
+}
+
+pub fn run(args: SweepArgs) -> anyhow::Result<()> {
+    use quadcl::sweep;
+    match args.command {
+        SweepCommand::Plan(a) => {
+            let plan = sweep::plan(&a.file, &a.out)?;
+            for c in &plan.cells {
+                println!("{:>4}  {}", c.index, c.name);
+            }
+            println!(
+                "{} cells in {} groups planned into {} (run them with `quadcl sweep local {}` or `quadcl sweep slurm {} --submit`)",
+                plan.cells.len(),
+                plan.groups().len(),
+                a.out.display(),
+                a.out.display(),
+                a.out.display()
+            );
+            Ok(())
+        }
+        SweepCommand::Local(a) => {
+            anyhow::ensure!(a.jobs >= 1, "--jobs = 0: expected at least 1");
+            let mut options = sweep::LocalOptions::sharing_cores(a.jobs, std::env::current_exe()?);
+            if let Some(t) = a.threads_per_job {
+                anyhow::ensure!(t >= 1, "--threads-per-job = 0: expected at least 1");
+                options.threads_per_job = t;
+            }
+            let report = sweep::run_local(&a.dir, &options, &mut |line| eprintln!("{line}"))?;
+            anyhow::ensure!(
+                report.failed.is_empty(),
+                "cells {:?} failed (their logs are in {}/logs): `quadcl sweep local` again resumes them",
+                report.failed,
+                a.dir.display()
+            );
+            println!(
+                "{} cells finished now, {} before; collect with `quadcl sweep collect {}`",
+                report.finished.len(),
+                report.already_finished.len(),
+                a.dir.display()
+            );
+            Ok(())
+        }
+        SweepCommand::Slurm(a) => {
+            let quadcl = match a.quadcl {
+                Some(p) => std::path::absolute(p)?,
+                None => std::env::current_exe()?,
+            };
+            let options = sweep::SlurmOptions {
+                partition: a.partition,
+                time: a.time,
+                cpus_per_task: a.cpus_per_task,
+                mem: a.mem,
+                quadcl,
+            };
+            let (script, cells) = sweep::write_sbatch(&a.dir, &options)?;
+            println!("{}: an array of {} cells", script.display(), cells.len());
+            if a.submit {
+                let dir = std::path::absolute(&a.dir)?;
+                let job = sweep::submit(&dir, &cells)?;
+                println!("submitted as job {job}; follow it with `quadcl sweep status {}`", a.dir.display());
+            } else {
+                println!("submit it with `sbatch {}` (or again with --submit)", script.display());
+            }
+            Ok(())
+        }
+        SweepCommand::Status(a) => {
+            let cells = sweep::status(&a.dir, true)?;
+            if a.json {
+                println!("{}", serde_json::to_string_pretty(&cells)?);
+            } else {
+                print!("{}", sweep::status_lines(&cells));
+            }
+            Ok(())
+        }
+        SweepCommand::Collect(a) => {
+            let table = sweep::collect_and_write(&a.dir)?;
+            print!("{}", sweep::markdown(&table));
+            println!(
+                "\nwritten to {} and {}",
+                a.dir.join(sweep::COLLECTED_MD).display(),
+                a.dir.join(sweep::COLLECTED_JSON).display()
+            );
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! What `quadcl sweep local` says about a cell it runs: `DIR/state/I.json`
+//! holds `running` (with the child's pid and the host) while the cell's
+//! `quadcl run` is alive, `failed` (with its exit status) after it failed,
+//! and nothing once it finished. A `running` marker whose process is gone
+//! (the sweep was killed) reads as not running: the run folder says how far
+//! the cell got, and the next `sweep local` resumes it.
+
+use super::STATE_DIR;
+use crate::util::write_atomic;
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A cell's marker.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "state", rename_all = "snake_case")]
+pub enum Marker {
+    /// A `quadcl run` of the cell is (or was, if `pid` is gone) running on `host`.
+    Running { pid: u32, host: String },
+    /// The cell's last `quadcl run` failed; its log says why.
+    Failed { exit_code: Option<i32>, host: String },
+}
+
+impl Marker {
+    /// Whether this marker's run is alive: `running` on this host with its process still there.
+    pub fn is_alive(&self) -> bool {
+        match self {
+            Marker::Running { pid, host } => *host == hostname() && process_exists(*pid),
+            Marker::Failed { .. } => false,
+        }
+    }
+}
+
+/// The marker file of cell `index` in the sweep folder `dir`.
+pub fn marker_path(dir: &Path, index: usize) -> PathBuf {
+    dir.join(STATE_DIR).join(format!("{index}.json"))
+}
+
+/// The marker of cell `index`, if any (an unreadable one counts as none).
+pub fn read_marker(dir: &Path, index: usize) -> Option<Marker> {
+    let text = std::fs::read_to_string(marker_path(dir, index)).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// Writes (atomically) or, with None, removes the marker of cell `index`.
+pub fn write_marker(dir: &Path, index: usize, marker: Option<&Marker>) -> anyhow::Result<()> {
+    let path = marker_path(dir, index);
+    match marker {
+        Some(m) => write_atomic(&path, serde_json::to_string(m)?.as_bytes()),
+        None if path.exists() => std::fs::remove_file(&path).with_context(|| format!("removing {}", path.display())),
+        None => Ok(()),
+    }
+}
+
+/// This machine's host name ("unknown" if it cannot be read).
+pub fn hostname() -> String {
+    let mut buf = [0u8; 256];
+    // SAFETY: gethostname writes at most buf.len() bytes into buf.
+    let rc = unsafe { libc::gethostname(buf.as_mut_ptr().cast(), buf.len()) };
+    if rc != 0 {
+        return "unknown".into();
+    }
+    let end = buf.iter().position(|b| *b == 0).unwrap_or(buf.len());
+    String::from_utf8_lossy(&buf[..end]).into_owned()
+}
+
+/// Whether a process `pid` exists on this machine (and is not a zombie waiting to be reaped).
+fn process_exists(pid: u32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        // The state letter follows the command name in parentheses.
+        Ok(stat) => stat.rsplit(')').next().and_then(|rest| rest.trim_start().chars().next()).is_some_and(|s| s != 'Z'),
+        // SAFETY: signal 0 only checks that the process exists.
+        Err(_) => !Path::new("/proc/self").exists() && unsafe { libc::kill(pid as libc::pid_t, 0) } == 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_marker_is_alive_only_while_its_process_runs_on_this_host() {
+        let dir = tempfile::tempdir().unwrap();
+        let me = Marker::Running { pid: std::process::id(), host: hostname() };
+        write_marker(dir.path(), 3, Some(&me)).unwrap();
+        assert_eq!(read_marker(dir.path(), 3), Some(me.clone()));
+        assert!(me.is_alive());
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let gone = child.id();
+        child.wait().unwrap();
+        assert!(!Marker::Running { pid: gone, host: hostname() }.is_alive());
+        assert!(!Marker::Running { pid: std::process::id(), host: "elsewhere".into() }.is_alive());
+        write_marker(dir.path(), 3, None).unwrap();
+        assert_eq!(read_marker(dir.path(), 3), None);
+    }
+}

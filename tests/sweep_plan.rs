@@ -1,0 +1,91 @@
+//! `sweep plan`: a sweep file's axes crossed into cells with names derived from their
+//! values, one checked run file per cell, and every bad key or value refused, naming the
+//! sweep file and the key, before anything is written.
+
+use quadcl::engine::RunConfig;
+use quadcl::sweep::{plan, Plan};
+use std::path::{Path, PathBuf};
+
+fn smoke() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/smoke.toml")
+}
+
+/// A sweep file beside a copy of smoke.toml (the base named relative to it).
+fn sweep_file(dir: &Path, axes: &str) -> PathBuf {
+    std::fs::copy(smoke(), dir.join("smoke.toml")).unwrap();
+    let path = dir.join("sweep.toml");
+    std::fs::write(&path, format!("base = \"smoke.toml\"\n[axes]\n{axes}")).unwrap();
+    path
+}
+
+#[test]
+fn a_two_by_two_sweep_plans_four_named_cells_each_a_valid_run_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = sweep_file(tmp.path(), "seed = [1, 2]\n\"net.mask.capacity\" = [0.2, 0.3]\n");
+    let out = tmp.path().join("out");
+    let p = plan(&file, &out).unwrap();
+    let names: Vec<&str> = p.cells.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["capacity=0.2 seed=1", "capacity=0.2 seed=2", "capacity=0.3 seed=1", "capacity=0.3 seed=2"]);
+    let groups = p.groups();
+    assert_eq!(groups, vec![("capacity=0.2".to_string(), vec![0, 1]), ("capacity=0.3".to_string(), vec![2, 3])]);
+    for (cell, (capacity, seed)) in p.cells.iter().zip([(0.2, 1), (0.2, 2), (0.3, 1), (0.3, 2)]) {
+        let path = out.join(&cell.config);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(quadcl::util::sha256_hex(text.as_bytes()), cell.run_file_sha256);
+        let run = RunConfig::load(&path).unwrap();
+        assert_eq!((run.config.net.mask.capacity, run.config.seed), (capacity, seed));
+        // Everything else is the base run file's.
+        let base = RunConfig::load(&smoke()).unwrap();
+        assert_eq!((run.sequence, run.config.ppo), (base.sequence, base.config.ppo));
+        assert_eq!(cell.iterations, vec![3, 3, 3]);
+    }
+    assert_eq!(Plan::load(&out).unwrap(), p);
+    // A cell's run file edited after planning is refused before anything runs (local or Slurm).
+    p.check_cells(&out).unwrap();
+    let cell0 = out.join(&p.cells[0].config);
+    let edited = std::fs::read_to_string(&cell0).unwrap().replace("seed = 1", "seed = 9");
+    std::fs::write(&cell0, &edited).unwrap();
+    let err = format!("{:#}", p.check_cells(&out).unwrap_err());
+    assert!(err.contains("cells/0.toml") && err.contains("changed since the sweep was planned"), "{err}");
+    let err = format!("{:#}", quadcl::sweep::write_sbatch(&out, &Default::default()).unwrap_err());
+    assert!(err.contains("changed since the sweep was planned"), "{err}");
+    std::fs::write(&cell0, std::fs::read_to_string(&cell0).unwrap().replace("seed = 9", "seed = 1")).unwrap();
+    // Planning the same sweep again keeps the folder; another sweep is refused.
+    assert_eq!(plan(&file, &out).unwrap(), p);
+    let other = sweep_file(tmp.path(), "seed = [1, 2, 3]\n");
+    let err = format!("{:#}", plan(&other, &out).unwrap_err());
+    assert!(err.contains("already holds another sweep"), "{err}");
+}
+
+#[test]
+fn a_method_axis_and_a_list_index_reach_their_keys() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = sweep_file(tmp.path(), "\"method.name\" = [\"ours\", \"finetune\"]\n\"task.1.iterations\" = [2]\n");
+    let p = plan(&file, &tmp.path().join("out")).unwrap();
+    assert_eq!(p.cells[1].name, "name=finetune iterations=2");
+    let run = RunConfig::load(&tmp.path().join("out").join(&p.cells[1].config)).unwrap();
+    assert_eq!(run.method, "finetune");
+    assert_eq!(p.cells[1].iterations, vec![3, 2, 3]);
+}
+
+#[test]
+fn a_bad_key_or_a_refused_value_names_the_sweep_file_and_the_key_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (axes, needles) in [
+        ("\"net.mask.capacty\" = [0.2]\nseed = [1]\n", vec!["net.mask.capacty", "capacty"]),
+        ("\"net.mask.capacity\" = [0.2, 1.5]\n", vec!["\"net.mask.capacity\" = 1.5", "capacity"]),
+        ("seed = [1, \"two\"]\n", vec!["\"seed\" = \"two\""]),
+        ("\"ppo.num_envs\" = [0]\n", vec!["\"ppo.num_envs\" = 0", "num_envs"]),
+        ("\"method.name\" = [\"ourz\"]\n", vec!["\"method.name\" = \"ourz\"", "ourz"]),
+        ("seed = []\n", vec!["\"seed\"", "empty"]),
+    ] {
+        let file = sweep_file(tmp.path(), axes);
+        let out = tmp.path().join("never");
+        let err = format!("{:#}", plan(&file, &out).unwrap_err());
+        assert!(err.contains(&file.display().to_string()), "{axes}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{axes}: expected {n:?} in {err}");
+        }
+        assert!(!out.exists(), "{axes}: nothing is written before every cell is checked");
+    }
+}
