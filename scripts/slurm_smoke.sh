@@ -13,7 +13,8 @@
 #    machine is left alone.
 # 3. Plans the 2 x 2 sweep scenes/sweep-smoke.toml (scenes/smoke.toml with two
 #    mask capacities and two seeds), submits it with
-#    `quadcl sweep slurm --submit`, waits for the array (squeue), collects it,
+#    `quadcl sweep slurm --submit`, checks that `quadcl sweep status` sees the
+#    cells queued or running (squeue), waits for the array, collects it,
 #    and checks the table: two groups of two finished seeds, each mean inside its
 #    interval, every run's provenance naming its cell's run file.
 # 4. Stops only the daemons it started (by their process ids) and removes its folder.
@@ -123,6 +124,12 @@ submitted=$("$bin" sweep slurm "$sweep" --cpus-per-task 1 --time 00:20:00 --subm
 echo "$submitted"
 job=$(sed -n 's/^submitted as job \([0-9]*\).*/\1/p' <<<"$submitted")
 [ -n "$job" ] || { echo "no job id in: $submitted" >&2; exit 1; }
+# Right after submission every cell is in the scheduler's hands: quadcl sweep status asks squeue.
+states=$("$bin" sweep status "$sweep" --json | python3 -c 'import json, sys; print(" ".join(c["state"] for c in json.load(sys.stdin)))')
+echo "cells as submitted: $states"
+for s in $states; do
+  case $s in queued | running | finished) ;; *) echo "cell $s right after submission: squeue not read?" >&2; exit 1 ;; esac
+done
 start=$(date +%s)
 while [ -n "$(squeue -h -j "$job" 2>/dev/null)" ]; do
   [ $(( $(date +%s) - start )) -lt 1200 ] || { echo "the array did not finish in 20 minutes" >&2; exit 1; }

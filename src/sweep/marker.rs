@@ -22,10 +22,11 @@ pub enum Marker {
 }
 
 impl Marker {
-    /// Whether this marker's run is alive: `running` on this host with its process still there.
+    /// Whether this marker's run is alive: `running` on this host with its process still there
+    /// (and, where `/proc` tells, still a `quadcl run ... --resume`: a reused pid is not the cell's).
     pub fn is_alive(&self) -> bool {
         match self {
-            Marker::Running { pid, host } => *host == hostname() && process_exists(*pid),
+            Marker::Running { pid, host } => *host == hostname() && process_exists(*pid) && runs_resume(*pid),
             Marker::Failed { .. } => false,
         }
     }
@@ -74,6 +75,14 @@ fn process_exists(pid: u32) -> bool {
     }
 }
 
+/// Whether process `pid`'s arguments include `--resume` (true where `/proc` cannot say).
+fn runs_resume(pid: u32) -> bool {
+    match std::fs::read(format!("/proc/{pid}/cmdline")) {
+        Ok(cmdline) => cmdline.split(|b| *b == 0).any(|arg| arg == b"--resume"),
+        Err(_) => !Path::new("/proc/self").exists(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -81,15 +90,18 @@ mod tests {
     #[test]
     fn a_marker_is_alive_only_while_its_process_runs_on_this_host() {
         let dir = tempfile::tempdir().unwrap();
-        let me = Marker::Running { pid: std::process::id(), host: hostname() };
-        write_marker(dir.path(), 3, Some(&me)).unwrap();
-        assert_eq!(read_marker(dir.path(), 3), Some(me.clone()));
-        assert!(me.is_alive());
-        let mut child = std::process::Command::new("true").spawn().unwrap();
-        let gone = child.id();
-        child.wait().unwrap();
-        assert!(!Marker::Running { pid: gone, host: hostname() }.is_alive());
-        assert!(!Marker::Running { pid: std::process::id(), host: "elsewhere".into() }.is_alive());
+        // A stand-in for a cell's `quadcl run ... --resume`.
+        let mut cell = std::process::Command::new("sh").args(["-c", "sleep 5", "run", "--resume"]).spawn().unwrap();
+        let running = Marker::Running { pid: cell.id(), host: hostname() };
+        write_marker(dir.path(), 3, Some(&running)).unwrap();
+        assert_eq!(read_marker(dir.path(), 3), Some(running.clone()));
+        assert!(running.is_alive());
+        assert!(!Marker::Running { pid: cell.id(), host: "elsewhere".into() }.is_alive());
+        // A live process that is not a cell's run (a reused pid): not alive.
+        assert!(!Marker::Running { pid: std::process::id(), host: hostname() }.is_alive());
+        cell.kill().unwrap();
+        cell.wait().unwrap();
+        assert!(!running.is_alive(), "its process is gone");
         write_marker(dir.path(), 3, None).unwrap();
         assert_eq!(read_marker(dir.path(), 3), None);
     }
