@@ -12,9 +12,10 @@
 //!   layer's features F (rows, d) (Roy & Vetterli 2007, as in Dohare et al. 2024's
 //!   study of plasticity loss): exp of the entropy of the normalised singular values
 //!   p_k = sigma_k / sum sigma, between 1 (rank-one features) and d (d orthogonal
-//!   directions of equal weight); 0 for all-zero features. Singular values below
-//!   1e-5 of the largest are taken as 0 (round-off). The singular values are the
-//!   square roots of the eigenvalues of F^T F (d x d, f64).
+//!   directions of equal weight); 0 for all-zero features, NaN (left out of the
+//!   curves) for non-finite ones. Singular values below 1e-5 of the largest are
+//!   taken as 0 (round-off); they are the square roots of the eigenvalues of
+//!   F^T F (d x d, f64).
 //! - `plasticity/selected_abs_w/LAYER`, `plasticity/trainable_share/LAYER`: see
 //!   [`crate::nn::SelectedWeights`].
 //!
@@ -66,6 +67,10 @@ pub fn effective_rank(features: &[f32], width: usize) -> anyhow::Result<f64> {
     let rows = features.len() / width.max(1);
     if rows == 0 || width == 0 {
         return Ok(0.0);
+    }
+    // A diverged network's features have no spectrum (and the eigen solver would not converge).
+    if !features.iter().all(|v| v.is_finite()) {
+        return Ok(f64::NAN);
     }
     let f = Tensor::from_slice(&features[..rows * width], (rows, width), &Device::Cpu)?.to_dtype(DType::F64)?;
     let gram = f.t()?.matmul(&f)?.flatten_all()?.to_vec1::<f64>()?; // (width, width)
@@ -186,6 +191,7 @@ mod tests {
         assert!(close(effective_rank(&identity, 8).unwrap(), 8.0));
         assert!(close(effective_rank(&identity.repeat(3), 8).unwrap(), 8.0));
         assert_eq!(effective_rank(&[0.0; 32], 8).unwrap(), 0.0, "no direction at all");
+        assert!(effective_rank(&[1.0, f32::NAN, 0.0, 1.0], 2).unwrap().is_nan(), "diverged: no figure");
     }
 
     #[test]
