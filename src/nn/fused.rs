@@ -419,27 +419,4 @@ mod tests {
             close(gf.get(x.as_tensor()).unwrap(), gr.get(x.as_tensor()).unwrap(), "grad x");
         }
     }
-
-    #[test]
-    fn the_hidden_outputs_are_the_forwards_activations_layer_by_layer() {
-        let (sizes, dev) = ([5, 7, 6, 3], Device::Cpu);
-        let x = Tensor::randn(0f32, 1.0, (9, 5), &dev).unwrap();
-        let theta = Tensor::randn(0f32, 0.5, theta_len(&sizes), &dev).unwrap();
-        let hidden = fused_mlp_hidden("net", &sizes, Activation::Elu, &x, &theta).unwrap();
-        assert_eq!(hidden.iter().map(Vec::len).collect::<Vec<_>>(), vec![9 * 7, 9 * 6]);
-        let (offs, _) = offsets(&sizes);
-        let mut h = x.clone();
-        for (l, want) in hidden.iter().enumerate() {
-            let (w_at, b_at) = offs[l];
-            let w = theta.narrow(0, w_at, sizes[l] * sizes[l + 1]).unwrap().reshape((sizes[l + 1], sizes[l])).unwrap();
-            let b = theta.narrow(0, b_at, sizes[l + 1]).unwrap();
-            h = activate(Activation::Elu, &h.matmul(&w.t().unwrap()).unwrap().broadcast_add(&b).unwrap()).unwrap();
-            let got = h.flatten_all().unwrap().to_vec1::<f32>().unwrap();
-            for (a, b) in got.iter().zip(want) {
-                assert!((a - b).abs() < 1e-4 * (1.0 + b.abs()), "layer {l}: {a} vs {b}");
-            }
-        }
-        let err = fused_mlp_hidden("net", &sizes, Activation::Elu, &x.narrow(1, 0, 4).unwrap(), &theta).unwrap_err();
-        assert!(format!("{err}").contains("net: input shape [9, 4]"), "{err}");
-    }
 }

@@ -103,6 +103,27 @@ mod tests {
     use rand::SeedableRng;
 
     #[test]
+    fn the_hidden_outputs_are_the_forwards_activations_layer_by_layer() {
+        let cfg = MaskConfig::default();
+        let mut net: Network = MaskedMlp::new("net", &[5, 7, 6, 3], Activation::Elu, &cfg, 2).unwrap().into();
+        net.begin_task(0, &[]).unwrap();
+        net.begin_iteration(0, &mut rand_chacha::ChaCha8Rng::seed_from_u64(1)).unwrap();
+        let x = candle_core::Tensor::randn(0f32, 1.0, (9, 5), &candle_core::Device::Cpu).unwrap();
+        let hidden = net.hidden_outputs(&net.frozen_weights(None).unwrap(), &x).unwrap();
+        assert_eq!(hidden.iter().map(Vec::len).collect::<Vec<_>>(), vec![9 * 7, 9 * 6]);
+        let mut h = x.clone();
+        for (l, want) in net.as_masked().unwrap().layers().iter().zip(&hidden) {
+            h = super::super::activation::activate(Activation::Elu, &l.forward(&h).unwrap()).unwrap();
+            let got = h.flatten_all().unwrap().to_vec1::<f32>().unwrap();
+            for (a, b) in got.iter().zip(want) {
+                assert!((a - b).abs() < 1e-4 * (1.0 + b.abs()), "{}: {a} vs {b}", l.name());
+            }
+        }
+        let err = net.hidden_outputs(&net.frozen_weights(None).unwrap(), &x.narrow(1, 0, 4).unwrap()).unwrap_err();
+        assert!(format!("{err}").contains("net: input shape [9, 4]"), "{err}");
+    }
+
+    #[test]
     fn selected_weights_count_the_iterations_mask_and_what_may_still_move() {
         let cfg = MaskConfig::default();
         let mut net: Network = MaskedMlp::new("toy", &[8, 16, 2], Activation::Elu, &cfg, 3).unwrap().into();
