@@ -35,9 +35,33 @@ fn one_iteration_reports_every_namespaced_metric() {
         "charts/sigma/actor.l0",
         "charts/score_gap/critic.l2",
         "charts/sigma/cenet_encoder.l0",
+        "plasticity/dormant/actor",
+        "plasticity/dormant/cenet_decoder",
+        "plasticity/effective_rank/critic",
+        "plasticity/selected_abs_w/actor.l0",
+        "plasticity/trainable_share/cenet_encoder.l1",
+        "time/plasticity_s",
     ] {
         let v = metrics[0].get(key).unwrap_or_else(|| panic!("missing {key}: {:?}", metrics[0].keys()));
         assert!(v.is_finite(), "{key} = {v}");
+    }
+}
+
+#[test]
+fn the_plasticity_diagnostics_of_a_first_task_are_in_range() {
+    let metrics = run(&small_ppo_config(), 2, 3);
+    for m in &metrics {
+        for (key, v) in m.iter().filter(|(k, _)| k.starts_with("plasticity/")) {
+            let ok = match key.split('/').nth(1) {
+                // At most the last hidden layer's width (32 or 16 here).
+                Some("effective_rank") => (1.0..=32.0).contains(v),
+                Some("selected_abs_w") => *v > 0.0 && v.is_finite(),
+                _ => (0.0..=1.0).contains(v),
+            };
+            assert!(ok, "{key} = {v}");
+        }
+        // A first task: every selected weight is vacant, so the task may change all of them.
+        assert_eq!(m["plasticity/trainable_share/actor.l0"], 1.0);
     }
 }
 

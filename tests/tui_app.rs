@@ -90,6 +90,34 @@ fn curve_and_mask_keys_change_what_is_drawn() {
 }
 
 #[test]
+fn m_cycles_through_the_plasticity_diagnostics_of_a_trained_step() {
+    use quadcl::tui::app::CurveMetric;
+    let tmp = tempfile::tempdir().unwrap();
+    let (mut app, mut worker) = open_toy(tmp.path(), (120, 40));
+    act(&mut app, &mut worker, Action::StartPause, |a| a.paused && a.opened.as_ref().unwrap().results.steps.len() == 1);
+    let curve = &app.opened.as_ref().unwrap().results.curves[0];
+    let dormant = &curve.plasticity["plasticity/dormant/toy"];
+    assert_eq!(dormant.len(), curve.performance.len(), "one value per iteration");
+    assert!(dormant.iter().all(|d| (0.0..=1.0).contains(d)), "{dormant:?}");
+    let panel = |app: &quadcl::tui::App| tui_common::panel(app, 76, 14, tmp.path(), quadcl::tui::panels::curves::draw);
+    (0..5).for_each(|_| app.update(Action::CurveMetricNext));
+    assert_eq!(app.metric, CurveMetric::Dormant);
+    let text = panel(&app);
+    assert!(text.contains("Curves: dormant units · step 0 crash:FL"), "{text}");
+    assert!(text.contains("toy"), "the network's line is named: {text}");
+    app.update(Action::CurveMetricNext);
+    assert!(panel(&app).contains("Curves: effective rank"));
+    app.update(Action::CurveMetricNext);
+    let text = panel(&app);
+    assert!(text.contains("Curves: selected |w| · step 0 crash:FL · toy (1/1)"), "{text}");
+    assert!(text.contains("toy.l0") && text.contains("toy.l1"), "one line per layer: {text}");
+    app.update(Action::CurveMetricNext);
+    assert!(panel(&app).contains("Curves: trainable share"));
+    app.update(Action::CurveMetricNext);
+    assert_eq!(app.metric, CurveMetric::Performance, "the cycle closes");
+}
+
+#[test]
 fn start_pause_and_quit_while_training_ask_the_engine_and_the_user() {
     let tmp = tempfile::tempdir().unwrap();
     let (mut app, mut worker) = open_toy(tmp.path(), (120, 40));

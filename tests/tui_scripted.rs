@@ -39,6 +39,10 @@ fn a_scripted_session_starts_a_task_changes_a_switch_composes_a_related_task_and
     act(&mut app, &mut worker, Action::StartPause, |a| steps(a) == 1 && a.paused);
     app.update(Action::Show(Screen::Overview));
     snap!("step0_learned", screen(&app, 120, 40, hide));
+    // Its plasticity diagnostics (`m` past the fall rate): the mean |w| of each layer's selection.
+    (0..7).for_each(|_| app.update(Action::CurveMetricNext));
+    snap!("step0_selected_abs_w", tui_common::panel(&app, 76, 14, hide, quadcl::tui::panels::curves::draw));
+    (0..2).for_each(|_| app.update(Action::CurveMetricNext));
 
     // Step 1 names step 0's task as related; the preview comes from the engine.
     app.update(Action::Show(Screen::NextTask));

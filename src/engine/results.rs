@@ -91,6 +91,11 @@ pub struct TaskCurve {
     /// how much of the hard mask each iteration redrew.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub mask_churn: BTreeMap<String, Vec<f64>>,
+    /// The plasticity diagnostics each iteration, by full metric name (`plasticity/dormant/NET`,
+    /// `plasticity/effective_rank/NET`, `plasticity/selected_abs_w/LAYER`,
+    /// `plasticity/trainable_share/LAYER`: `rl/plasticity.rs`); absent from runs written before.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub plasticity: BTreeMap<String, Vec<f64>>,
 }
 
 impl TaskCurve {
@@ -112,6 +117,8 @@ impl TaskCurve {
                 self.sigma.entry(layer.to_string()).or_default().push(*value);
             } else if let Some(layer) = per_layer(metric_names::MASK_CHURN) {
                 self.mask_churn.entry(layer.to_string()).or_default().push(*value);
+            } else if per_layer(metric_names::PLASTICITY).is_some() {
+                self.plasticity.entry(key.clone()).or_default().push(*value);
             }
         }
     }
@@ -219,5 +226,28 @@ mod tests {
         )
         .unwrap();
         assert!(old.fall_rate.is_empty(), "a run written before fall_rate was recorded still reads");
+        assert!(old.plasticity.is_empty(), "and one written before the plasticity diagnostics");
+    }
+
+    #[test]
+    fn a_curve_keeps_the_plasticity_diagnostics_by_full_name() {
+        let mut curve = TaskCurve::default();
+        let it = |dormant: f64| -> Metrics {
+            [
+                ("plasticity/dormant/actor".to_string(), dormant),
+                ("plasticity/trainable_share/actor.l0".to_string(), 0.25),
+                ("charts/performance".to_string(), 0.5),
+            ]
+            .into_iter()
+            .collect()
+        };
+        curve.push(&it(0.1));
+        curve.push(&it(0.2));
+        assert_eq!(curve.plasticity["plasticity/dormant/actor"], vec![0.1, 0.2]);
+        assert_eq!(curve.plasticity["plasticity/trainable_share/actor.l0"], vec![0.25, 0.25]);
+        assert_eq!(curve.plasticity.len(), 2, "only the plasticity/ metrics");
+        let text = serde_json::to_string(&curve).unwrap();
+        assert!(text.contains(r#""plasticity":{"plasticity/dormant/actor":[0.1,0.2]"#), "{text}");
+        assert!(!serde_json::to_string(&TaskCurve::default()).unwrap().contains("plasticity"), "left out when empty");
     }
 }

@@ -15,7 +15,8 @@ use crate::nn::{
     MaskedAdam, MaskedMlp, Network, NetworkKind, TaskId,
 };
 use crate::rl::{
-    apply_hooks, layer_metrics, metric_names, EvalReport, Metrics, NoHooks, OutputSample, PolicyProbe, UpdateHooks,
+    apply_hooks, layer_metrics, metric_names, network_plasticity, EvalReport, Metrics, NoHooks, OutputSample,
+    PolicyProbe, UpdateHooks,
 };
 use anyhow::Context;
 use candle_core::{Device, Tensor};
@@ -115,6 +116,8 @@ impl Learner for ToyLearner {
         let y = targets(&a, &x);
         let xt = Tensor::from_vec(x, (BATCH, IN), &Device::Cpu)?;
         let yt = Tensor::from_vec(y, (BATCH, OUT), &Device::Cpu)?;
+        // Observations only: the batch's activations with the iteration's masks.
+        let plasticity = network_plasticity(&self.net, &self.net.frozen_weights(None)?, &xt)?;
         let mse = self.net.forward(&xt)?.sub(&yt)?.sqr()?.mean_all()?;
         let loss = mse.add(&self.net.soft_score_loss()?)?;
         let params = self.net.params();
@@ -125,6 +128,7 @@ impl Learner for ToyLearner {
         self.iteration += 1;
         let mse = f64::from(mse.to_scalar::<f32>()?);
         m.extend(layers);
+        m.extend(plasticity);
         m.insert("losses/mse".into(), mse);
         m.insert(metric_names::PERFORMANCE.into(), 1.0 / (1.0 + mse));
         m.insert(metric_names::EPISODIC_RETURN.into(), -mse);

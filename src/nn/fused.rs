@@ -210,6 +210,38 @@ pub fn fused_mlp(
     }
 }
 
+/// Every hidden layer's output (after the activation) of the forward on x (batch, sizes[0])
+/// with `theta` as [`fused_mlp`] takes it: one row-major (batch, sizes[l + 1]) vector per
+/// hidden layer, the values the forward computes (same kernels); no graph. What the
+/// plasticity diagnostics read (`rl/plasticity.rs`). The error names `network`.
+pub(crate) fn fused_mlp_hidden(
+    network: &str,
+    sizes: &[usize],
+    activation: Activation,
+    x: &Tensor,
+    theta: &Tensor,
+) -> anyhow::Result<Vec<Vec<f32>>> {
+    let dims = x.dims();
+    anyhow::ensure!(
+        dims.len() == 2 && dims[1] == sizes[0],
+        "{network}: input shape {dims:?}, expected (batch, {})",
+        sizes[0]
+    );
+    anyhow::ensure!(
+        theta.elem_count() == theta_len(sizes),
+        "{network}: theta has {} elements, sizes {sizes:?} need {}",
+        theta.elem_count(),
+        theta_len(sizes)
+    );
+    let op = FusedMlp { sizes: sizes.to_vec(), activation, saved: Mutex::new(None) };
+    let (x, theta) = (x.contiguous()?, theta.contiguous()?);
+    with_f32_slice(&x, "fused-mlp hidden", |x| {
+        with_f32_slice(&theta, "fused-mlp hidden", |theta| op.run(x, theta, true))
+    })??;
+    let hidden = op.saved.into_inner().map_err(|_| anyhow::anyhow!("{network}: fused MLP lock poisoned"))?;
+    hidden.ok_or_else(|| anyhow::anyhow!("{network}: the forward kept no hidden outputs"))
+}
+
 impl CustomOp2 for FusedMlp {
     fn name(&self) -> &'static str {
         "fused-mlp"

@@ -14,7 +14,8 @@
 //! - `optim`: [`MaskedAdam`], which never moves a frozen element;
 //! - [`checkpoint`]: policy directories (safetensors + bit-packed masks + manifest);
 //! - `stats`: the mask statistics printed by `quadcl masks`;
-//! - `element_view`: every element as one task sees it (the TUI's heatmap), the transfer preview.
+//! - `element_view`: every element as one task sees it (the TUI's heatmap), the transfer preview;
+//! - `plasticity_probe`: what the plasticity diagnostics read (hidden outputs, selected weights).
 
 mod activation;
 mod bitmask;
@@ -28,6 +29,7 @@ mod masked_weight;
 mod mlp;
 mod network;
 mod optim;
+mod plasticity_probe;
 mod product;
 mod select;
 mod state;
@@ -46,6 +48,7 @@ pub use masked::{LayerIteration, MaskedLinear};
 pub use mlp::{FrozenWeights, MaskedMlp};
 pub use network::{AsNetworkRef, IterationNoise, Network, NetworkRef};
 pub use optim::{AdamConfig, MaskedAdam, Moments};
+pub use plasticity_probe::SelectedWeights;
 pub use product::MatrixProduct;
 pub use select::row_quota;
 pub use state::{ElementState, IllegalTransition, TaskId};

@@ -1,5 +1,5 @@
 //! One iteration's metrics, by CleanRL-style namespaced name (`charts/*`,
-//! `losses/*`, `time/*`): the one type every training loop, the engine, the
+//! `losses/*`, `time/*`, `plasticity/*`): the one type every training loop, the engine, the
 //! methods and the observers pass around, and the names they share.
 
 use std::collections::BTreeMap;
@@ -34,6 +34,18 @@ pub mod names {
     pub const MASK_CHURN: &str = "charts/mask_churn";
     /// Wall-clock seconds of the training run (or of the sequence step) so far.
     pub const WALL_S: &str = "time/wall_s";
+    /// Prefix of every plasticity diagnostic (`rl/plasticity.rs`).
+    pub const PLASTICITY: &str = "plasticity";
+    /// Prefix of a network's share of dormant hidden units (ReDo), `plasticity/dormant/NET`.
+    pub const DORMANT: &str = "plasticity/dormant";
+    /// Prefix of the effective rank of a network's last hidden layer's features,
+    /// `plasticity/effective_rank/NET`.
+    pub const EFFECTIVE_RANK: &str = "plasticity/effective_rank";
+    /// Prefix of a layer's mean |W| over the iteration's selected weights, `plasticity/selected_abs_w/LAYER`.
+    pub const SELECTED_ABS_W: &str = "plasticity/selected_abs_w";
+    /// Prefix of the share of a layer's selected weights the task may still change,
+    /// `plasticity/trainable_share/LAYER` (masked layers).
+    pub const TRAINABLE_SHARE: &str = "plasticity/trainable_share";
 }
 
 /// Masked layers' soft-score statistics as metrics: `charts/sigma/LAYER`,

@@ -15,6 +15,7 @@
 //! | `trainer` | one task's training run: `metrics.jsonl`, checkpoints, policy directory |
 //! | `training_state` | what a checkpoint keeps beyond the policy so that a resume is exact (Adam, streams, envs) |
 //! | `metrics` | the [`Metrics`] of an iteration and the metric names every loop shares |
+//! | `plasticity` | plasticity diagnostics per iteration: dormant units, effective rank, selected weights |
 //! | `metrics_log` | `metrics.jsonl`, a row appended per iteration, cut to the checkpoint on resume |
 //! | `progress` | what every training loop shares in reporting: the bar, the iteration line, the step and time counters |
 //! | `evaluate` | deterministic evaluation, one episode per env: the `quadcl eval` figures |
@@ -36,6 +37,7 @@ mod losses;
 mod metrics;
 mod metrics_log;
 mod normalizer;
+mod plasticity;
 mod policy_dir;
 mod ppo;
 mod progress;
@@ -58,6 +60,7 @@ pub use evaluate::{evaluate, EvalReport};
 pub use gait::{record_gait, GaitReport, GaitSummary, HeldCommand};
 pub use metrics::{layer_metrics, names as metric_names, Metrics};
 pub use normalizer::RunningNormalizer;
+pub use plasticity::{dormant_fraction, dormant_units, effective_rank, network_plasticity, subsample_rows};
 pub use policy_dir::{
     load_for_task, load_policy, load_policy_or_checkpoint, load_training_checkpoint, save_policy, LoadedPolicy,
     PolicyInfo, PolicyOrCheckpoint,

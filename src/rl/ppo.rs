@@ -114,6 +114,10 @@ impl PpoLearner {
         for net in [&self.agent.actor, &self.agent.critic, &self.agent.encoder, &self.agent.decoder] {
             metrics.extend(layer_metrics(&net.layer_stats()?));
         }
+        // Observations only (`rl/plasticity.rs`): the rollout's weights, no random stream.
+        let probe_start = Instant::now();
+        metrics.extend(self.agent.plasticity_metrics(&self.buffer)?);
+        metrics.insert("time/plasticity_s".into(), probe_start.elapsed().as_secs_f64());
         let rollout_s = start.elapsed().as_secs_f64();
         let update_start = Instant::now();
         metrics.extend(self.update_with(hooks)?);

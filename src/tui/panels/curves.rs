@@ -3,10 +3,12 @@
 //! weight the user sets (or switches off), downsampled to the chart's width.
 //! Live while the step trains (its curve grows with each iteration event).
 
+use super::plasticity_series::{plasticity_series, Series};
 use crate::engine::TaskCurve;
+use crate::rl::metric_names;
 use crate::tui::app::App;
 use crate::tui::ui::block;
-use ratatui::layout::Rect;
+use ratatui::layout::{Constraint, Rect};
 use ratatui::style::{Color, Style};
 use ratatui::symbols::Marker;
 use ratatui::text::Line;
@@ -21,6 +23,14 @@ pub enum CurveMetric {
     LinVelErr,
     AngVelErr,
     FallRate,
+    /// `plasticity/dormant/NET`, one line per network.
+    Dormant,
+    /// `plasticity/effective_rank/NET`, one line per network.
+    EffectiveRank,
+    /// `plasticity/selected_abs_w/LAYER`, one line per layer of one network (`n` cycles them).
+    SelectedAbsW,
+    /// `plasticity/trainable_share/LAYER`, one line per layer of one network.
+    TrainableShare,
 }
 
 impl CurveMetric {
@@ -31,10 +41,14 @@ impl CurveMetric {
             CurveMetric::LinVelErr => "lin_vel_err m/s",
             CurveMetric::AngVelErr => "ang_vel_err rad/s",
             CurveMetric::FallRate => "fall rate",
+            CurveMetric::Dormant => "dormant units",
+            CurveMetric::EffectiveRank => "effective rank",
+            CurveMetric::SelectedAbsW => "selected |w|",
+            CurveMetric::TrainableShare => "trainable share",
         }
     }
 
-    /// The values of this metric in `curve`.
+    /// The values of this metric in `curve` (empty for a plasticity metric: see [`Self::plasticity_prefix`]).
     pub fn of(self, curve: &TaskCurve) -> &[f64] {
         match self {
             CurveMetric::Performance => &curve.performance,
@@ -42,6 +56,18 @@ impl CurveMetric {
             CurveMetric::LinVelErr => &curve.lin_vel_err,
             CurveMetric::AngVelErr => &curve.ang_vel_err,
             CurveMetric::FallRate => &curve.fall_rate,
+            _ => &[],
+        }
+    }
+
+    /// The metric-name prefix of a plasticity metric's series (`plasticity/dormant`, ...).
+    pub fn plasticity_prefix(self) -> Option<&'static str> {
+        match self {
+            CurveMetric::Dormant => Some(metric_names::DORMANT),
+            CurveMetric::EffectiveRank => Some(metric_names::EFFECTIVE_RANK),
+            CurveMetric::SelectedAbsW => Some(metric_names::SELECTED_ABS_W),
+            CurveMetric::TrainableShare => Some(metric_names::TRAINABLE_SHARE),
+            _ => None,
         }
     }
 
@@ -53,7 +79,11 @@ impl CurveMetric {
             Return => LinVelErr,
             LinVelErr => AngVelErr,
             AngVelErr => FallRate,
-            FallRate => Performance,
+            FallRate => Dormant,
+            Dormant => EffectiveRank,
+            EffectiveRank => SelectedAbsW,
+            SelectedAbsW => TrainableShare,
+            TrainableShare => Performance,
         }
     }
 }
@@ -78,51 +108,90 @@ pub fn debiased_ema(values: &[f64], weight: f64) -> Vec<f64> {
 
 /// At most `width` points: the mean of each of `width` equal buckets (x = the bucket's middle index).
 pub fn downsample(values: &[f64], width: usize) -> Vec<(f64, f64)> {
-    if values.len() <= width || width == 0 {
-        return values.iter().enumerate().map(|(i, v)| (i as f64, *v)).collect();
+    let points: Vec<(f64, f64)> = values.iter().enumerate().map(|(i, v)| (i as f64, *v)).collect();
+    downsample_points(&points, width)
+}
+
+/// At most `width` points: the mean (x and y) of each of `width` equal buckets of `points`.
+pub fn downsample_points(points: &[(f64, f64)], width: usize) -> Vec<(f64, f64)> {
+    if points.len() <= width || width == 0 {
+        return points.to_vec();
     }
     (0..width)
         .map(|b| {
             let (lo, hi) =
-                (b * values.len() / width, ((b + 1) * values.len() / width).max(b * values.len() / width + 1));
-            let mean = values[lo..hi].iter().sum::<f64>() / (hi - lo) as f64;
-            ((lo + hi - 1) as f64 / 2.0, mean)
+                (b * points.len() / width, ((b + 1) * points.len() / width).max(b * points.len() / width + 1));
+            let n = (hi - lo) as f64;
+            let bucket = &points[lo..hi];
+            (bucket.iter().map(|p| p.0).sum::<f64>() / n, bucket.iter().map(|p| p.1).sum::<f64>() / n)
         })
         .collect()
 }
 
+/// What the panel draws: one unnamed line for a training curve, or one named line per network
+/// or layer for a plasticity diagnostic; the boundaries' x; what the title says it shows.
+#[derive(Debug, Default)]
+struct Shown {
+    lines: Vec<Series>,
+    bounds: Vec<f64>,
+    what: String,
+}
+
 /// The curves to draw: the selected step's, or every step's in order (with the boundaries' x).
-fn series(app: &App) -> (Vec<f64>, Vec<f64>, String) {
-    let Some(o) = &app.opened else { return (Vec::new(), Vec::new(), String::new()) };
+fn shown(app: &App) -> Shown {
+    let Some(o) = &app.opened else { return Shown::default() };
     let mut curves: Vec<&TaskCurve> = o.results.curves.iter().collect();
     if let Some(l) = &app.live {
         curves.push(&l.curve);
     }
-    if app.whole_sequence {
-        let mut values = Vec::new();
-        let mut bounds = Vec::new();
-        for c in curves {
-            if !values.is_empty() {
-                bounds.push(values.len() as f64 - 0.5);
-            }
-            values.extend_from_slice(app.metric.of(c));
+    let (curves, what) = if app.whole_sequence {
+        (curves, "the whole sequence".to_string())
+    } else {
+        let Some(row) = app.selected() else { return Shown::default() };
+        match row.step.and_then(|s| curves.iter().find(|c| c.step == s)) {
+            Some(c) => (vec![*c], format!("step {} {}", c.step, c.name)),
+            None => return Shown { what: row.task, ..Shown::default() },
         }
-        return (values, bounds, "the whole sequence".into());
+    };
+    if let Some(prefix) = app.metric.plasticity_prefix() {
+        let per_layer = matches!(app.metric, CurveMetric::SelectedAbsW | CurveMetric::TrainableShare);
+        let s = plasticity_series(&curves, prefix, per_layer, app.network);
+        let what = match s.network {
+            Some((net, i, n)) => format!("{what} · {net} ({i}/{n})"),
+            None => what,
+        };
+        return Shown { lines: s.lines, bounds: s.bounds, what };
     }
-    let Some(row) = app.selected() else { return (Vec::new(), Vec::new(), String::new()) };
-    match row.step.and_then(|s| curves.iter().find(|c| c.step == s)) {
-        Some(c) => (app.metric.of(c).to_vec(), Vec::new(), format!("step {} {}", c.step, c.name)),
-        None => (Vec::new(), Vec::new(), row.task),
+    let (mut values, mut bounds) = (Vec::new(), Vec::new());
+    for c in curves {
+        if !values.is_empty() {
+            bounds.push(values.len() as f64 - 0.5);
+        }
+        values.extend_from_slice(app.metric.of(c));
     }
+    let points = values.iter().enumerate().map(|(i, v)| (i as f64, *v)).collect();
+    Shown { lines: vec![Series { name: String::new(), points }], bounds, what }
 }
 
+/// A line of `data` in `color`.
+fn line(data: &[(f64, f64)], color: Color) -> Dataset<'_> {
+    Dataset::default().marker(Marker::Braille).graph_type(GraphType::Line).style(Style::new().fg(color)).data(data)
+}
+
+/// The colours of the named lines (yellow marks the boundaries).
+const LINE_COLORS: [Color; 6] =
+    [Color::Cyan, Color::Magenta, Color::Green, Color::LightRed, Color::LightBlue, Color::White];
+
 pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
-    let (values, bounds, what) = series(app);
+    let Shown { lines, bounds, what } = shown(app);
     let smoothing = if app.smoothing_on { format!("EMA {:.2}", app.smoothing) } else { "raw".to_string() };
     let title = format!("Curves: {} · {what} · {smoothing}", app.metric.label());
-    if values.is_empty() {
+    if lines.iter().all(|l| l.points.is_empty()) {
         let why = match app.selected() {
             Some(r) if r.step.is_none() => "learned before the sequence (the base policy): no curve in this run",
+            Some(_) if app.metric.plasticity_prefix().is_some() => {
+                "no plasticity diagnostics here (yet, or in a run written before they were recorded)"
+            }
             Some(_) => "no iterations yet (space starts the next step)",
             None => "",
         };
@@ -130,39 +199,41 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
         return;
     }
     let width = (area.width.saturating_sub(10) as usize * 2).max(2);
-    let raw = downsample(&values, width);
-    let smooth = if app.smoothing_on { downsample(&debiased_ema(&values, app.smoothing), width) } else { Vec::new() };
-    let (mut lo, mut hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+    let ys = || lines.iter().flat_map(|l| l.points.iter().map(|p| p.1));
+    let (mut lo, mut hi) = ys().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
     if hi - lo < 1e-9 {
         (lo, hi) = (lo - 0.5, hi + 0.5);
     }
+    let iterations = lines.iter().flat_map(|l| l.points.last()).map(|p| p.0 as usize + 1).max().unwrap_or(0);
+    let smoothed = |l: &Series| -> Vec<(f64, f64)> {
+        let ys: Vec<f64> = l.points.iter().map(|p| p.1).collect();
+        let ema = debiased_ema(&ys, app.smoothing);
+        downsample_points(&l.points.iter().zip(ema).map(|(p, y)| (p.0, y)).collect::<Vec<_>>(), width)
+    };
+    let raw: Vec<Vec<(f64, f64)>> = lines.iter().map(|l| downsample_points(&l.points, width)).collect();
+    let smooth: Vec<Vec<(f64, f64)>> = if app.smoothing_on { lines.iter().map(smoothed).collect() } else { Vec::new() };
     let boundary_lines: Vec<Vec<(f64, f64)>> = bounds.iter().map(|x| vec![(*x, lo), (*x, hi)]).collect();
-    let mut datasets: Vec<Dataset> = boundary_lines
-        .iter()
-        .map(|l| {
-            Dataset::default()
-                .marker(Marker::Braille)
-                .graph_type(GraphType::Line)
-                .style(Style::new().fg(Color::Yellow))
-                .data(l)
-        })
-        .collect();
-    let raw_style = if app.smoothing_on { Style::new().fg(Color::DarkGray) } else { Style::new().fg(Color::Cyan) };
-    datasets.push(Dataset::default().marker(Marker::Braille).graph_type(GraphType::Line).style(raw_style).data(&raw));
-    if app.smoothing_on {
-        datasets.push(
-            Dataset::default()
-                .marker(Marker::Braille)
-                .graph_type(GraphType::Line)
-                .style(Style::new().fg(Color::Cyan))
-                .data(&smooth),
-        );
+    let mut datasets: Vec<Dataset> = boundary_lines.iter().map(|l| line(l, Color::Yellow)).collect();
+    let named = lines.len() > 1 || lines.iter().any(|l| !l.name.is_empty());
+    if named {
+        // One colour per line: its smoothed values when smoothing is on, else the raw ones.
+        let drawn = if app.smoothing_on { &smooth } else { &raw };
+        for (i, (l, data)) in lines.iter().zip(drawn).enumerate() {
+            datasets.push(line(data, LINE_COLORS[i % LINE_COLORS.len()]).name(l.name.clone()));
+        }
+    } else {
+        datasets.push(line(&raw[0], if app.smoothing_on { Color::DarkGray } else { Color::Cyan }));
+        if app.smoothing_on {
+            datasets.push(line(&smooth[0], Color::Cyan));
+        }
     }
-    let n = values.len() as f64;
     let chart = Chart::new(datasets)
         .block(block(&title, focused))
+        .hidden_legend_constraints((Constraint::Ratio(1, 2), Constraint::Ratio(1, 1)))
         .x_axis(
-            Axis::default().bounds([0.0, (n - 1.0).max(1.0)]).labels(["0".to_string(), format!("{} it", values.len())]),
+            Axis::default()
+                .bounds([0.0, (iterations as f64 - 1.0).max(1.0)])
+                .labels(["0".to_string(), format!("{iterations} it")]),
         )
         .y_axis(Axis::default().bounds([lo, hi]).labels([format!("{lo:.2}"), format!("{hi:.2}")]));
     f.render_widget(chart, area);

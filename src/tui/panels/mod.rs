@@ -5,6 +5,7 @@ pub mod curves;
 pub mod help;
 pub mod masks;
 pub mod matrix;
+pub mod plasticity_series;
 pub mod robot;
 pub mod sweep;
 pub mod timeline;
