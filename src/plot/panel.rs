@@ -52,8 +52,11 @@ fn x_range(panel: &LinePanel) -> (f64, f64) {
 /// and below unless an end is one of the fixed values.
 fn y_range(panel: &LinePanel) -> (f64, f64) {
     let mut range: Option<(f64, f64)> = None;
-    let values = panel.lines.iter().filter_map(|(c, _)| c.value_range()).flat_map(|(lo, hi)| [lo, hi]);
-    for v in values.chain(panel.y_includes.iter().copied()) {
+    let values: Vec<f64> =
+        panel.lines.iter().filter_map(|(c, _)| c.value_range()).flat_map(|(lo, hi)| [lo, hi]).collect();
+    // Without any value, the axis of a share: 0 to 1.
+    let fallback: &[f64] = if values.is_empty() { &[0.0, 1.0] } else { &[] };
+    for v in values.into_iter().chain(panel.y_includes.iter().copied()).chain(fallback.iter().copied()) {
         range = Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
     }
     // Beyond this the span of the axis would overflow (no measure gets near it).
@@ -79,7 +82,24 @@ fn tick_format(span: f64) -> impl Fn(&f64) -> String {
     } else {
         3
     };
-    move |v: &f64| format!("{v:.decimals$}")
+    move |v: &f64| {
+        let text = format!("{v:.decimals$}");
+        // A tick a rounding error below zero reads 0, not -0.00.
+        if text.trim_start_matches('-').chars().all(|c| c == '0' || c == '.') {
+            text.trim_start_matches('-').to_string()
+        } else {
+            text
+        }
+    }
+}
+
+/// Iteration ticks: whole numbers only (a tick between two iterations stays unlabelled).
+fn iteration_format(v: &f64) -> String {
+    if (v - v.round()).abs() < 1e-9 {
+        format!("{v:.0}")
+    } else {
+        String::new()
+    }
 }
 
 /// Draws `panel` into `area`.
@@ -96,15 +116,14 @@ where
         .x_label_area_size(46)
         .y_label_area_size(74)
         .build_cartesian_2d(x0..x1, y0..y1)?;
-    let x_format = |v: &f64| format!("{v:.0}");
     let y_format = tick_format(y1 - y0);
     chart
         .configure_mesh()
         .x_desc(panel.x_desc.as_str())
         .y_desc(panel.y_desc.as_str())
-        .x_labels(6)
+        .x_labels(((x1 - x0).floor() as usize + 1).clamp(2, 6))
         .y_labels(6)
-        .x_label_formatter(&x_format)
+        .x_label_formatter(&iteration_format)
         .y_label_formatter(&y_format)
         .label_style(text(TICK_SIZE))
         .axis_desc_style(text(LABEL_SIZE))
@@ -156,6 +175,7 @@ mod tests {
         assert_eq!(lo, 0.0);
         assert!((hi - 2.625).abs() < 1e-12, "{hi}");
         assert_eq!(y_range(&panel(&[3.0, 3.0], &[])), (2.7, 3.3));
+        assert_eq!(y_range(&panel(&[], &[0.0])), (0.0, 1.05));
         assert_eq!(x_range(&panel(&[1.0, 2.0, 3.0], &[])), (1.0, 3.0));
     }
 
@@ -164,5 +184,8 @@ mod tests {
         assert_eq!(tick_format(50.0)(&12.345), "12");
         assert_eq!(tick_format(1.0)(&0.5), "0.50");
         assert_eq!(tick_format(0.05)(&0.0123), "0.012");
+        assert_eq!(tick_format(1.0)(&-1e-17), "0.00");
+        assert_eq!(tick_format(1.0)(&-0.25), "-0.25");
+        assert_eq!((iteration_format(&2.0), iteration_format(&2.5)), ("2".to_string(), String::new()));
     }
 }
