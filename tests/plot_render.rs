@@ -1,10 +1,11 @@
 //! The figures of `quadcl plot` from the committed fixture `tests/plot_fixture/two-tasks/`
 //! (a `metrics.json` of two steps whose curves carry a `plasticity` object): each renders to
 //! a PNG of its size and to an SVG whose text holds the figure's title, the runs' names, the
-//! tasks and the axes' units.
+//! tasks and the axes' units; the command line writes them and names bad input.
 
 use quadcl::plot::{load_run, render_png, write_figures, Figure, PlotOptions, RunData};
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/plot_fixture/two-tasks")
@@ -135,4 +136,31 @@ fn a_figure_is_the_same_bytes_every_time() {
     let first = render_png(Figure::TaskCurves, &runs, &PlotOptions::default()).unwrap();
     assert_eq!(first, render_png(Figure::TaskCurves, &runs, &PlotOptions::default()).unwrap());
     assert_ne!(first, render_png(Figure::TaskCurves, &runs, &PlotOptions { smooth: 4 }).unwrap());
+}
+
+fn quadcl(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_quadcl")).args(args).output().unwrap()
+}
+
+#[test]
+fn the_plot_command_writes_the_figures_and_names_bad_input() {
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("figures");
+    let fixture = fixture();
+    let ok = quadcl(&["plot", fixture.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--label", "mine"]);
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    let printed = String::from_utf8_lossy(&ok.stdout);
+    assert_eq!(printed.lines().count(), 8, "{printed}");
+    let svg = std::fs::read_to_string(dir.join("sequence.svg")).unwrap();
+    assert_has(&svg_texts(&svg), &["mine"], "sequence.svg");
+
+    let empty = out.path().join("not-a-run");
+    std::fs::create_dir(&empty).unwrap();
+    let err = quadcl(&["plot", empty.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&err.stderr);
+    assert!(!err.status.success() && stderr.contains("not-a-run: no metrics.json"), "{stderr}");
+
+    let two_labels = quadcl(&["plot", fixture.to_str().unwrap(), "--out", "x", "--label", "a", "--label", "b"]);
+    let stderr = String::from_utf8_lossy(&two_labels.stderr);
+    assert!(!two_labels.status.success() && stderr.contains("2 --label for 1 runs"), "{stderr}");
 }
