@@ -13,7 +13,13 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 pub struct Boundary {
     pub at: f64,
     pub label: String,
+    pub colour: RGBColor,
+    /// Which line of names, from the top, the label goes on (boundaries of several runs).
+    pub label_row: u32,
 }
+
+/// The colour of boundaries that every run shares, and of a panel's notes.
+pub const BOUNDARY_GREY: RGBColor = RGBColor(90, 90, 90);
 
 /// What one panel shows.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -141,18 +147,18 @@ where
     for (curve, colour) in &panel.lines {
         chart.draw_series(LineSeries::new(curve.points.iter().copied(), colour.stroke_width(2)))?;
     }
-    let grey = RGBColor(90, 90, 90);
     for b in &panel.boundaries {
         if b.at > x0 {
-            let line = DashedPathElement::new(vec![(b.at, y0), (b.at, y1)], 6, 4, grey.stroke_width(1));
+            let line = DashedPathElement::new(vec![(b.at, y0), (b.at, y1)], 6, 4, b.colour.stroke_width(1));
             chart.draw_series(std::iter::once(line))?;
         }
-        let label = EmptyElement::at((b.at, y1)) + Text::new(b.label.clone(), (4, 3), text(TICK_SIZE).color(&grey));
+        let label = EmptyElement::at((b.at, y1))
+            + Text::new(b.label.clone(), (4, 3 + 16 * b.label_row as i32), text(TICK_SIZE).color(&b.colour));
         chart.draw_series(std::iter::once(label))?;
     }
     if panel.lines.iter().all(|(c, _)| c.is_empty()) {
         let centre = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-        let style = text(LABEL_SIZE).color(&grey).pos(Pos::new(HPos::Center, VPos::Center));
+        let style = text(LABEL_SIZE).color(&BOUNDARY_GREY).pos(Pos::new(HPos::Center, VPos::Center));
         let note = EmptyElement::at(centre) + Text::new("not recorded", (0, 0), style);
         chart.draw_series(std::iter::once(note))?;
     }

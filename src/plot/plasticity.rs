@@ -156,7 +156,7 @@ where
         } else {
             panel_area.clone()
         };
-        let boundaries = runs.first().map(task_boundaries).unwrap_or_default();
+        let boundaries = task_boundaries(runs);
         let x_desc = "iteration of the sequence".to_string();
         let x_includes = sequence_span(runs);
         let panel = LinePanel { caption, x_desc, y_desc, lines, boundaries, y_includes, x_includes };
