@@ -28,6 +28,8 @@ pub enum Command {
     Gait(crate::cmd::gait::GaitArgs),
     /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
     Run(crate::cmd::run::RunArgs),
+    /// Figures of runs, overlaid: training curves per task, the whole sequence, the evaluation matrix, plasticity (PNG and SVG).
+    Plot(crate::cmd::plot::PlotArgs),
     /// Record a policy's episodes on a task into an .mcap file (Foxglove) or an .rrd file (Rerun).
     Record(crate::cmd::record::RecordArgs),
     /// Watch a policy walk on a task in the Rerun 3D viewer, live (and optionally save it as .rrd).
@@ -51,6 +53,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Eval(args)) => crate::cmd::eval::run(args),
         Some(Command::Gait(args)) => crate::cmd::gait::run(args),
         Some(Command::Run(args)) => crate::cmd::run::run(args),
+        Some(Command::Plot(args)) => crate::cmd::plot::run(args),
         Some(Command::Finetune(args)) => crate::cmd::finetune::run(args),
         Some(Command::Tui(args)) => crate::cmd::tui::run(args),
         Some(Command::Record(args)) => crate::cmd::record::run(args),

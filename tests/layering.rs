@@ -24,9 +24,10 @@ fn allowed_imports(lib_rs: &str) -> BTreeMap<String, BTreeSet<String>> {
     table
 }
 
+/// The `.rs` files at or under `path` (a module folder may hold other files: src/plot's font).
 fn rust_files(path: &Path) -> Vec<PathBuf> {
     if path.is_file() {
-        return vec![path.to_path_buf()];
+        return if path.extension().is_some_and(|e| e == "rs") { vec![path.to_path_buf()] } else { Vec::new() };
     }
     let mut files = Vec::new();
     for entry in std::fs::read_dir(path).unwrap() {

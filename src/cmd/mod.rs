@@ -5,6 +5,7 @@ pub mod eval;
 pub mod finetune;
 pub mod gait;
 pub mod masks;
+pub mod plot;
 pub mod record;
 pub mod robot;
 pub mod run;

@@ -1,5 +1,6 @@
 //! `quadcl run --config FILE --out DIR [--method NAME] [--resume]`: trains a task sequence
-//! headless (see `headless`), then prints the summary measures.
+//! headless (see `headless`), draws its figures into `DIR/plots/` (see `quadcl::plot`), then
+//! prints the summary measures.
 
 use clap::Args;
 use std::io::IsTerminal;
@@ -10,7 +11,7 @@ pub struct RunArgs {
     /// Run file (TOML): experiment config, [method], [eval], [run] and the [[task]] sequence.
     #[arg(long)]
     pub config: PathBuf,
-    /// Output folder: metrics.json, checkpoints/, log.txt, run.toml, tb/ (TensorBoard and CSV).
+    /// Output folder: metrics.json, checkpoints/, log.txt, run.toml, tb/ (TensorBoard and CSV), plots/.
     #[arg(long)]
     pub out: PathBuf,
     /// Continue an interrupted run in --out from its last completed task (a folder that holds no run yet starts it).
@@ -48,6 +49,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             no_tensorboard: args.no_tb,
         },
     )?;
+    // The results are written: a figure that fails to draw is a warning, not the run's failure.
+    let plots = args.out.join(quadcl::plot::PLOTS_DIR);
+    if let Err(e) = quadcl::plot::write_run_plots(&args.out) {
+        eprintln!("warning: {}: the figures were not drawn: {e:#}", plots.display());
+    }
     let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
     println!(
         "{} steps of {} ({}): average performance {}, forgetting {}, plasticity {}, forward transfer {}; results in {}",
