@@ -1,7 +1,8 @@
 //! Fuzzing every parser and loader (issue 16 item 7): no input panics. A
 //! seeded mutation fuzzer on stable Rust (no nightly, no new dependency):
 //! each target starts from a committed seed corpus (the shipped scenes,
-//! `tests/fuzz_corpus/` and the shipped base policy; the training-checkpoint
+//! `tests/fuzz_corpus/` and the shipped base policy; the figures' run files from
+//! `tests/plot_fixture/`; the training-checkpoint
 //! targets from a tiny training the test runs first), mutates it (byte flips, insertions of tokens the
 //! format cares about, deletions, duplications, truncations) and feeds every
 //! result to the loader, which may return an error but must not panic.
@@ -329,5 +330,40 @@ fn fuzz_sweep_plans() {
         std::fs::write(dir.path().join("sweep.json"), input).unwrap();
         let _ = quadcl::sweep::status(dir.path(), false);
         let _ = quadcl::sweep::collect(dir.path());
+    });
+}
+
+#[test]
+fn fuzz_run_metrics_for_figures() {
+    use quadcl::plot::{load_run, render_svg, Figure, PlotOptions};
+    let seeds = vec![std::fs::read(root().join("tests/plot_fixture/two-tasks/metrics.json")).unwrap()];
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("metrics.json");
+    let tokens = &[
+        "{",
+        "}",
+        "[",
+        "]",
+        ",",
+        "null",
+        "\"",
+        "-1",
+        "0",
+        "1e308",
+        "-1e308",
+        "18446744073709551615",
+        "\"plasticity/dormant/x\": [1, 2]",
+        "\"rows\": [[]]",
+        "\"trained\": [99]",
+    ];
+    fuzz("plot-metrics", &seeds, tokens, |input| {
+        std::fs::write(&path, input).unwrap();
+        // A file that loads must draw every figure (or fail cleanly).
+        if let Ok(run) = load_run(&path, None) {
+            let runs = [run];
+            for figure in Figure::ALL.into_iter().filter(|f| f.applies_to(&runs)) {
+                let _ = render_svg(figure, &runs, &PlotOptions::default());
+            }
+        }
     });
 }
