@@ -46,15 +46,24 @@ pub fn panels(area: Rect, screen: Screen) -> Vec<(Panel, Rect)> {
     out
 }
 
-/// Draws the whole screen.
-pub fn draw(f: &mut Frame, app: &App) {
+/// Below [`MIN_SIZE`], says so on the whole frame and returns true (the caller draws nothing else).
+pub fn draw_too_small(f: &mut Frame) -> bool {
     let area = f.area();
-    if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
+    let small = area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1;
+    if small {
         let text = format!(
             "The terminal is {}x{}; the workbench needs at least {}x{}.\nEnlarge the window, or press q to quit.",
             area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
         );
         f.render_widget(Paragraph::new(text).wrap(Wrap { trim: true }), area);
+    }
+    small
+}
+
+/// Draws the whole screen.
+pub fn draw(f: &mut Frame, app: &App) {
+    let area = f.area();
+    if draw_too_small(f) {
         return;
     }
     let [header, _, keys] =

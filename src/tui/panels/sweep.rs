@@ -7,11 +7,11 @@
 use crate::sweep::collect::rows;
 use crate::sweep::{CellState, CellStatus};
 use crate::tui::sweep_view::SweepView;
-use crate::tui::ui::{block, MIN_SIZE};
+use crate::tui::ui::{block, draw_too_small};
 use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
-use ratatui::widgets::{Paragraph, Wrap};
+use ratatui::widgets::Paragraph;
 use ratatui::Frame;
 
 /// Width of a cell's progress bar.
@@ -119,12 +119,7 @@ fn table_lines(view: &SweepView, width: usize) -> Vec<Line<'static>> {
 /// Draws the whole Sweep screen.
 pub fn draw(f: &mut Frame, view: &SweepView) {
     let area = f.area();
-    if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
-        let text = format!(
-            "The terminal is {}x{}; the workbench needs at least {}x{}.\nEnlarge the window, or press q to quit.",
-            area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
-        );
-        f.render_widget(Paragraph::new(text).wrap(Wrap { trim: true }), area);
+    if draw_too_small(f) {
         return;
     }
     let table = table_lines(view, area.width.saturating_sub(2) as usize);
