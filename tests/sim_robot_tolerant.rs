@@ -325,3 +325,17 @@ fn the_shipped_robots_stand_with_their_run_files() {
         );
     }
 }
+
+/// A file as xacro leaves it (issue 36): a byte-order mark, an XML declaration, xacro
+/// expressions inside a comment and a processing instruction. It loads as the same robot
+/// as the file without them, and stands.
+#[test]
+fn xacro_leftovers_in_comments_and_a_byte_order_mark_load_and_stand() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cfg = quadcl::engine::RunConfig::load(&root.join("scenes/aliengo.toml")).unwrap().config.env;
+    let plain = RobotModel::for_config(&cfg).unwrap();
+    cfg.urdf = root.join("tests/fuzz_corpus/xacro-leftovers.urdf").display().to_string();
+    let robot = RobotModel::for_config(&cfg).unwrap();
+    assert!((robot.total_mass - plain.total_mass).abs() < 1e-9, "{} against {}", robot.total_mass, plain.total_mass);
+    assert_stands(&cfg, &robot);
+}

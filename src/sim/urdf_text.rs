@@ -10,7 +10,11 @@
 //! - Elements the format does not know inside `<robot>`, `<link>` and
 //!   `<joint>` are dropped (ROS extensions `<gazebo>` and `<transmission>`
 //!   silently, anything else with a warning).
-//! - A number that does not parse is an error naming its line and attribute.
+//! - A number that does not parse is an error naming its line and attribute;
+//!   a xacro expression (`$(arg X)`, `${...}`) is one too, saying the file needs
+//!   `xacro` first. Comments, processing instructions and CDATA are not markup:
+//!   what they hold is never read as a number (ROS's parser and MuJoCo's importer
+//!   skip them too), and a UTF-8 byte-order mark is dropped.
 //!
 //! Returns the cleaned text, which urdf-rs then reads.
 
@@ -33,7 +37,8 @@ const NUMERIC_ATTRIBUTES: [&str; 17] = [
 
 /// Cleans URDF text; pushes one line per tolerated problem onto `warnings`.
 pub(super) fn tolerant_urdf_text(text: &str, warnings: &mut Vec<String>) -> anyhow::Result<String> {
-    if let Some(bad) = find_bad_number(text) {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if let Some(bad) = find_bad_number(&blank_non_markup(text)) {
         bail!("bad number: {bad}");
     }
     let mut robot: Element = text.parse().map_err(|e| anyhow!("malformed URDF: {e}"))?;
@@ -150,7 +155,28 @@ fn same(a: &Element, b: &Element) -> bool {
         && ka.iter().zip(&kb).all(|(x, y)| same(x, y))
 }
 
-/// The first numeric attribute that does not parse, as "line N: name=\"value\" is not a number".
+/// `text` with every comment, processing instruction and CDATA section blanked out (each of
+/// their characters but line breaks replaced by a space), so lines keep their numbers.
+fn blank_non_markup(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some((at, end)) = ["<!--", "<?", "<![CDATA["]
+        .iter()
+        .zip(["-->", "?>", "]]>"])
+        .filter_map(|(open, close)| rest.find(open).map(|at| (at, close)))
+        .min_by_key(|(at, _)| *at)
+    {
+        out.push_str(&rest[..at]);
+        let span_end = rest[at..].find(end).map_or(rest.len(), |i| at + i + end.len());
+        out.extend(rest[at..span_end].chars().map(|c| if c == '\n' { '\n' } else { ' ' }));
+        rest = &rest[span_end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The first numeric attribute that does not parse, as "line N: name=\"value\" is not a number"
+/// (or is a xacro expression).
 fn find_bad_number(text: &str) -> Option<String> {
     for (line_no, line) in text.lines().enumerate() {
         let mut rest = line;
@@ -159,6 +185,13 @@ fn find_bad_number(text: &str) -> Option<String> {
             let after = &rest[eq + 2..];
             let Some(close) = after.find('"') else { break };
             let value = &after[..close];
+            if value.contains("$(") || value.contains("${") {
+                return Some(format!(
+                    "line {}: {name}=\"{value}\" is a xacro expression: this is a .xacro file, run `xacro` on it first \
+                     (e.g. `xacro robot.urdf.xacro > robot.urdf`)",
+                    line_no + 1
+                ));
+            }
             if NUMERIC_ATTRIBUTES.contains(&name) && value.split_whitespace().any(|t| t.parse::<f64>().is_err()) {
                 return Some(format!("line {}: {name}=\"{value}\" is not a number", line_no + 1));
             }
@@ -216,6 +249,32 @@ mod tests {
         assert!(warnings.iter().any(|w| w.contains("robot: unknown element <sensor>")), "{warnings:?}");
         assert!(warnings.iter().any(|w| w.contains("link 'a': unknown element <contact_coefficients>")));
         assert!(warnings.iter().any(|w| w.contains("joint 'j': repeated <limit>")), "{warnings:?}");
+    }
+
+    #[test]
+    fn comments_processing_instructions_cdata_and_a_byte_order_mark_are_not_read_as_markup() {
+        let text = "\u{feff}<?xml version=\"1.0\"?>\n<robot name=\"r\">\n\
+            <!-- <xacro:if value=\"$(arg DEBUG)\"> <mass value=\"x\"/> -->\n\
+            <link name=\"a\"><inertial><mass value=\"1\"/><![CDATA[ value=\"y\" ]]>\n\
+            <inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link></robot>";
+        let (out, warnings) = clean(text);
+        let out = out.unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        // urdf-rs, which reads the cleaned text, skips the comment as XML does.
+        let robot = rapier3d_urdf::urdf_rs::read_from_string(&out).unwrap_or_else(|e| panic!("{e}\n{out}"));
+        assert_eq!(robot.links[0].inertial.mass.value, 1.0);
+        // Line numbers still count the blanked lines.
+        let bad = text.replace("<mass value=\"1\"/>", "<mass value=\"z\"/>");
+        let err = format!("{:#}", clean(&bad).0.unwrap_err());
+        assert!(err.contains("line 4") && err.contains("value=\"z\""), "{err}");
+    }
+
+    #[test]
+    fn a_xacro_expression_outside_a_comment_says_the_file_needs_xacro_first() {
+        let text = "<robot name=\"r\">\n<link name=\"a\"><inertial><mass value=\"${mass}\"/></inertial></link>\n\
+            <joint name=\"j\" type=\"fixed\"><origin xyz=\"$(arg x) 0 0\"/></joint></robot>";
+        let err = format!("{:#}", clean(text).0.unwrap_err());
+        assert!(err.contains("line 2") && err.contains("${mass}") && err.contains("run `xacro`"), "{err}");
     }
 
     #[test]
