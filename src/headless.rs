@@ -39,8 +39,6 @@ struct TensorBoardObserver {
     done: i64,
     sequence: ScalarLog,
     task: Option<ScalarLog>,
-    /// Distinct task names, to tag the per-task measures.
-    tasks: Vec<String>,
     /// The first failure, reported once (training goes on: the curves are a record, not a result).
     failed: bool,
 }
@@ -48,9 +46,8 @@ struct TensorBoardObserver {
 impl TensorBoardObserver {
     /// `done` iterations of the run are complete (a resume starts there).
     fn open(root: &Path, done: usize) -> anyhow::Result<Self> {
-        let dir = root.join("sequence");
-        let sequence = if done == 0 { ScalarLog::create(&dir)? } else { ScalarLog::resume(&dir, done as i64 + 1)? };
-        Ok(Self { root: root.to_path_buf(), done: done as i64, sequence, task: None, tasks: Vec::new(), failed: false })
+        let sequence = ScalarLog::after(&root.join("sequence"), done)?;
+        Ok(Self { root: root.to_path_buf(), done: done as i64, sequence, task: None, failed: false })
     }
 
     fn handle(&mut self, event: &Event) -> anyhow::Result<()> {
@@ -59,9 +56,6 @@ impl TensorBoardObserver {
                 // A task redone after a resume starts its folder anew.
                 let dir = self.root.join(format!("{step:02}-{}", task_file_name(name)));
                 self.task = Some(ScalarLog::create(&dir)?);
-                if !self.tasks.contains(name) {
-                    self.tasks.push(name.clone());
-                }
             }
             Event::Iteration { iteration, metrics, .. } => {
                 let scalars = || metrics.iter().map(|(k, v)| (k.as_str(), *v));

@@ -96,6 +96,15 @@ impl ScalarLog {
         Self::open(dir, Some(step))
     }
 
+    /// The log in `dir` of a run whose steps 1..=`done` are behind it: [`Self::create`] when
+    /// none is, else [`Self::resume`] at step `done + 1`.
+    pub fn after(dir: &Path, done: usize) -> anyhow::Result<Self> {
+        match done {
+            0 => Self::create(dir),
+            _ => Self::resume(dir, done as i64 + 1),
+        }
+    }
+
     fn open(dir: &Path, restart: Option<i64>) -> anyhow::Result<Self> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let path = next_event_file(dir)?;
@@ -117,11 +126,6 @@ impl ScalarLog {
             csv.write_all(b"step,wall_time,tag,value\n")?;
         }
         Ok(Self { dir: dir.to_path_buf(), events, csv })
-    }
-
-    /// The folder this log writes into.
-    pub fn dir(&self) -> &Path {
-        &self.dir
     }
 
     /// Every finite value of `scalars` at `step`, tags as given (one event, one CSV row each).

@@ -247,11 +247,7 @@ pub fn train_from(
     };
     let first = done.as_ref().map_or(0, |s| s.iteration);
     let tb_dir = out.join("tb");
-    let mut tb = match (tensorboard, first) {
-        (false, _) => None,
-        (true, 0) => Some(ScalarLog::create(&tb_dir)?),
-        (true, at) => Some(ScalarLog::resume(&tb_dir, at as i64 + 1)?),
-    };
+    let mut tb = if tensorboard { Some(ScalarLog::after(&tb_dir, first)?) } else { None };
 
     let bar = progress_bar(cfg.iterations, progress);
     bar.set_prefix(task.to_string());
