@@ -24,6 +24,8 @@ pub enum Command {
     Train(crate::cmd::train::TrainArgs),
     /// Evaluate a policy on a task: return, tracking errors, falls (JSON with --json).
     Eval(crate::cmd::eval::EvalArgs),
+    /// A learned task as plain dense networks for deployment (ONNX or safetensors), its contract as metadata.
+    Export(crate::cmd::export::ExportArgs),
     /// The contact pattern of a policy under one held command: duty factors, foot pairings, gait.
     Gait(crate::cmd::gait::GaitArgs),
     /// Train a task sequence headless: metrics.json, checkpoints/, log (resumable).
@@ -51,6 +53,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Masks(args)) => crate::cmd::masks::run(args),
         Some(Command::Train(args)) => crate::cmd::train::run(args),
         Some(Command::Eval(args)) => crate::cmd::eval::run(args),
+        Some(Command::Export(args)) => crate::cmd::export::run(args),
         Some(Command::Gait(args)) => crate::cmd::gait::run(args),
         Some(Command::Run(args)) => crate::cmd::run::run(args),
         Some(Command::Plot(args)) => crate::cmd::plot::run(args),

@@ -13,6 +13,7 @@
 //! | [`sim`] | the Rapier quadruped: URDF loading, PD motors, `LocomotionEnv`, task perturbations, a parallel batch of envs | `config`, `util` |
 //! | [`nn`] | masked networks in candle: `MaskedLinear`, `MaskedMlp`, the masked Adam, checkpoints, mask statistics | `config`, `util` |
 //! | [`rl`] | PPO with a privileged critic and a context estimator (CENet), rollouts, GAE, normalisation, evaluation, policy directories, metric names and progress | `config`, `util`, `sim`, `nn`, `log` |
+//! | [`export`] | a learned task as plain dense networks for deployment: ONNX and PyTorch-named safetensors with the robot's contract as metadata | `config`, `util`, `sim`, `nn`, `rl` |
 //! | [`cl`] | continual learning around the learner: the method's hooks and switches, sequences, the continual measures | `config`, `util`, `sim`, `nn`, `rl` |
 //! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl`, `record`, `log` |
 //! | [`plot`] | figures of runs as PNG and SVG (`quadcl plot`): training curves, the whole sequence, the evaluation matrix, plasticity | `util`, `cl` |
@@ -36,6 +37,7 @@
 pub mod cl;
 pub mod config;
 pub mod engine;
+pub mod export;
 pub mod headless;
 pub mod log;
 pub mod nn;

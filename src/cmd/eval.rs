@@ -6,6 +6,9 @@
 //! push regime, e.g. to score policies trained under different pushes on the
 //! same test); prints mean return, normalised performance (over the best return a task
 //! allows, as metrics.json has it), tracking errors, fall rate, survival.
+//! `--policy-cmd CMD` takes the actions from another program instead (an exported
+//! model in ONNX Runtime: `rl::ExternalPolicy` says the protocol), in the
+//! environments the policy directory's config describes.
 
 use clap::Args;
 use quadcl::config::bounds::{self, NON_NEGATIVE};
@@ -40,6 +43,12 @@ pub struct EvalArgs {
     /// instead of the training config's `env.push_max_vel`.
     #[arg(long, value_name = "M_PER_S")]
     pub push_max_vel: Option<f32>,
+    /// Take the actions from this program instead of the policy's networks (run with `sh -c`;
+    /// it reads observation histories and writes actions as little-endian f32 on its standard
+    /// input and output, e.g. `python3 scripts/onnx_policy.py task.onnx`). The policy directory
+    /// still gives the environment.
+    #[arg(long, value_name = "CMD")]
+    pub policy_cmd: Option<String>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -68,7 +77,16 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let mut env = SimTrainEnv::new(env_cfg, &task, args.episodes, args.seed)?;
     // An episode lasts at most `episode_s`; allow a margin.
     let max_steps = (f64::from(env_cfg.episode_s) / f64::from(env_cfg.policy_dt())).ceil() as usize + 10;
-    let report = quadcl::rl::evaluate(agent, &mut env, &task.to_string(), args.seed, max_steps)?;
+    let report = match &args.policy_cmd {
+        None => quadcl::rl::evaluate(agent, &mut env, &task.to_string(), args.seed, max_steps)?,
+        Some(command) => {
+            let mut program = quadcl::rl::ExternalPolicy::spawn(command, agent.dims(), args.episodes)?;
+            let mut policy = |_: &[f32], histories: &[f32]| program.act(histories);
+            let report = quadcl::rl::evaluate_with(&mut policy, &mut env, &task.to_string(), args.seed, max_steps)?;
+            program.finish()?;
+            report
+        }
+    };
     // Normalised performance as metrics.json's evaluations have it (METHOD.md 4).
     let mut value = serde_json::to_value(&report)?;
     let fields = value.as_object_mut().expect("a struct serialises to an object");

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod eval;
+pub mod export;
 pub mod finetune;
 pub mod gait;
 pub mod masks;

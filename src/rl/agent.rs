@@ -298,6 +298,11 @@ impl Agent {
         Ok(())
     }
 
+    /// Whether observations are normalised before the networks see them.
+    pub fn normalizes(&self) -> bool {
+        self.normalize
+    }
+
     /// Normalised copy of raw actor observations (N, obs) or histories (N, H * obs).
     pub fn normalize_obs(&self, raw: &[f32]) -> Vec<f32> {
         if self.normalize {

@@ -49,13 +49,29 @@ pub fn evaluate(
     seed: u64,
     max_steps: usize,
 ) -> anyhow::Result<EvalReport> {
+    let weights = agent.acting_weights()?;
+    let mut policy = |obs: &[f32], histories: &[f32]| agent.act_deterministic_with(&weights, obs, histories);
+    evaluate_with(&mut policy, env, task, seed, max_steps)
+}
+
+/// A deterministic policy: observations (N, obs) and histories (N, H * obs) to actions (N, act).
+pub type PolicyFn<'a> = dyn FnMut(&[f32], &[f32]) -> anyhow::Result<Vec<f32>> + 'a;
+
+/// [`evaluate`] with any policy: `policy(observations (N, obs), histories (N, H * obs))`
+/// gives the actions (N, act); an external program's ([`super::ExternalPolicy`]), say.
+pub fn evaluate_with(
+    policy: &mut PolicyFn<'_>,
+    env: &mut dyn TrainEnv,
+    task: &str,
+    seed: u64,
+    max_steps: usize,
+) -> anyhow::Result<EvalReport> {
     let n = env.num_envs();
     let mut first: Vec<Option<EpisodeSummary>> = vec![None; n];
     let mut done = 0;
     let mut physics_resets = 0;
-    let weights = agent.acting_weights()?;
     for _ in 0..max_steps {
-        let actions = agent.act_deterministic_with(&weights, env.observations(), env.obs_histories())?;
+        let actions = policy(env.observations(), env.obs_histories())?;
         let step = env.step(&actions)?;
         physics_resets += step.physics_resets.len();
         for episode in step.finished {

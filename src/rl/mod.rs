@@ -32,6 +32,7 @@ mod agent;
 mod cenet_loss;
 mod env;
 mod evaluate;
+mod external_policy;
 mod gait;
 mod losses;
 mod metrics;
@@ -56,14 +57,15 @@ pub use acting::{ActOutput, ActingWeights};
 pub use acting_settings::{acting_settings_differences, ACTING_SETTINGS};
 pub use agent::Agent;
 pub use env::{EnvDims, EpisodeReplay, EpisodeSummary, TrainEnv, VecStep};
-pub use evaluate::{evaluate, EvalReport};
+pub use evaluate::{evaluate, evaluate_with, EvalReport};
+pub use external_policy::ExternalPolicy;
 pub use gait::{record_gait, GaitReport, GaitSummary, HeldCommand};
 pub use metrics::{layer_metrics, names as metric_names, Metrics};
 pub use normalizer::RunningNormalizer;
 pub use plasticity::{dormant_fraction, dormant_units, effective_rank, network_plasticity, subsample_rows};
 pub use policy_dir::{
-    load_for_task, load_policy, load_policy_or_checkpoint, load_training_checkpoint, save_policy, LoadedPolicy,
-    PolicyInfo, PolicyOrCheckpoint,
+    learned_task_names, load_for_task, load_policy, load_policy_or_checkpoint, load_training_checkpoint, save_policy,
+    LoadedPolicy, PolicyInfo, PolicyOrCheckpoint,
 };
 pub use ppo::{check_physics_resets, PpoLearner};
 pub use progress::{iteration_line, iteration_summary, progress_bar, TrainingClock};

@@ -52,6 +52,15 @@ impl RunningNormalizer {
     pub fn var(&self) -> Vec<f32> {
         self.var.iter().map(|&v| v as f32).collect()
     }
+    /// Per-feature factor of the normalisation, 1 / sqrt(var + eps), rounded to f32 (what a
+    /// deployed copy multiplies by; `normalize` keeps it in f64).
+    pub fn scale(&self) -> Vec<f32> {
+        self.var.iter().map(|v| (1.0 / (v + NORMALIZER_EPS).sqrt()) as f32).collect()
+    }
+    /// Normalised values are clipped to [-clip, clip].
+    pub fn clip(&self) -> f32 {
+        self.clip
+    }
     /// Rows seen so far.
     pub fn count(&self) -> f64 {
         self.count
