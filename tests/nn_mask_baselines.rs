@@ -74,6 +74,48 @@ fn packnet_keeps_the_largest_fresh_weights_freezes_them_and_recalls_without_late
     assert_eq!(count(&net, ElementState::Vacant), total - occupied - kept_by_task1, "the pruned stay free");
 }
 
+/// Piggyback's mask configuration as the method sets it, at the default score rate.
+fn piggyback() -> MaskConfig {
+    MaskConfig {
+        rule: SelectionRule::Piggyback,
+        private_share: 0.0,
+        reinit_weights: false,
+        reinit_scores: ScoreReinit::None,
+        entropy: false,
+        entropy_iterations: 0,
+        ..MaskConfig::default()
+    }
+}
+
+#[test]
+fn piggyback_scores_step_at_their_own_rate_so_a_task_starts_from_the_base() {
+    let ours = MaskConfig { private_share: 0.0, ..MaskConfig::default() };
+    let base_on =
+        |net: &MaskedMlp, task| -> usize { net.layers().iter().map(|l| l.task_mask(task).unwrap().count_ones()).sum() };
+    let run = |rate: f64| {
+        let mut net = MaskedMlp::new("actor", &[6, 10, 3], Activation::Elu, &ours, 4).unwrap();
+        train(&mut net, 0, &ours, 5);
+        let cfg = MaskConfig { piggyback_learning_rate: rate, ..piggyback() };
+        net.set_mask_config(&cfg).unwrap();
+        net.begin_task(1, &[]).unwrap();
+        let rates: Vec<Option<f64>> =
+            net.params().into_iter().filter(|p| p.name.ends_with(".score")).map(|p| p.fixed_learning_rate).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        train_steps(&mut net, 1, 20, &mut rng);
+        net.end_task(&mut rng).unwrap();
+        (rates, base_on(&net, 0), base_on(&net, 1))
+    };
+    // Adam moves a score by about its rate a step: 20 steps of 1e-4 stay inside the 5e-3
+    // margin between init and threshold, so the task still uses every base weight.
+    let (rates, base, kept) = run(1e-4);
+    assert!(rates.iter().all(|r| *r == Some(1e-4)), "{rates:?}");
+    assert_eq!(kept, base, "at 1e-4 a score crossed the threshold within 20 steps");
+    // At the optimiser's rate the same 20 steps switch base weights off.
+    let (rates, base, kept) = run(0.0);
+    assert!(rates.iter().all(Option::is_none), "{rates:?}");
+    assert!(kept < base, "at the optimiser's rate no score crossed the threshold");
+}
+
 #[test]
 fn piggyback_moves_no_weight_masks_only_the_base_and_recalls_exactly() {
     // The base: task 0 of the method, all of its elements left occupied (private share 0).
@@ -83,15 +125,9 @@ fn piggyback_moves_no_weight_masks_only_the_base_and_recalls_exactly() {
     let base: Vec<Vec<f32>> = net.layers().iter().map(|l| l.weight_values().unwrap()).collect();
     let x = input(7);
     let recall = values(&net.forward_task(0, &x).unwrap());
-    let cfg = MaskConfig {
-        rule: SelectionRule::Piggyback,
-        private_share: 0.0,
-        reinit_weights: false,
-        reinit_scores: ScoreReinit::None,
-        entropy: false,
-        entropy_iterations: 0,
-        ..MaskConfig::default()
-    };
+    // At the optimiser's rate (piggyback_learning_rate 0), so that 20 steps move scores
+    // across the threshold.
+    let cfg = MaskConfig { piggyback_learning_rate: 0.0, ..piggyback() };
     for task in 1..3 {
         train(&mut net, task, &cfg, 20);
         for (l, before) in net.layers().iter().zip(&base) {

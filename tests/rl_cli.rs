@@ -202,8 +202,8 @@ fn end_base_run_with(scene: &str, dir: &std::path::Path) -> std::path::PathBuf {
 
 /// The shipped base run (`policies/base-a1-flat-run`) was saved before issue 13 changed the
 /// soft-score defaults (its manifest names no `sigma_scale`) and before issue 31 split the
-/// re-initialisation (no `reinit_scores`). It must still be read as it ran, so policies/README's
-/// recipe that ends it with p = 0 resumes and makes the shipped `base-a1-flat-shared` again, byte
+/// re-initialisation (no `reinit_scores`). It must still be read as it ran, so the recipe of
+/// policies/base-a1-flat-shared/README.md that ends it with p = 0 resumes and makes the shipped `base-a1-flat-shared` again, byte
 /// for byte.
 #[test]
 fn a_base_run_saved_before_the_score_gap_unit_resumes_and_ends_as_it_did() {
@@ -216,16 +216,30 @@ fn a_base_run_saved_before_the_score_gap_unit_resumes_and_ends_as_it_did() {
 }
 
 /// The paper regime's base (issue 31): the same run ended keeping the base's ranking makes the
-/// shipped `base-a1-flat-ranked`, masks and model (the kept means, the redrawn vacant weights
-/// and means) byte for byte.
+/// shipped `base-a1-flat-ranked`: its masks file byte for byte and every tensor of its model (the
+/// kept means, the redrawn vacant weights and means) bit for bit.
 #[test]
 fn the_base_run_ended_with_the_ranking_kept_is_the_shipped_ranked_base() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
     let policy = end_base_run_with("scenes/train-base-ranked.toml", dir.path());
-    for file in ["masks.safetensors", "model.safetensors"] {
-        let made = std::fs::read(policy.join(file)).unwrap();
-        let shipped = std::fs::read(root.join("policies/base-a1-flat-ranked").join(file)).unwrap();
-        assert!(made == shipped, "{file} differs from the shipped base-a1-flat-ranked");
+    let read = |dir: &std::path::Path, file: &str| std::fs::read(dir.join(file)).unwrap();
+    let shipped = root.join("policies/base-a1-flat-ranked");
+    assert!(
+        read(&policy, "masks.safetensors") == read(&shipped, "masks.safetensors"),
+        "masks.safetensors differs from the shipped base-a1-flat-ranked"
+    );
+    // model.safetensors carries the manifest's hash, which changes whenever a setting is added
+    // to the config (issue 39's piggyback_learning_rate): its tensors must be the same bytes.
+    let (made, kept) = (read(&policy, "model.safetensors"), read(&shipped, "model.safetensors"));
+    let (made, kept) =
+        (safetensors::SafeTensors::deserialize(&made).unwrap(), safetensors::SafeTensors::deserialize(&kept).unwrap());
+    let mut names = made.names();
+    names.sort();
+    let mut kept_names = kept.names();
+    kept_names.sort();
+    assert_eq!(names, kept_names);
+    for name in names {
+        assert!(made.tensor(name).unwrap().data() == kept.tensor(name).unwrap().data(), "{name} differs");
     }
 }

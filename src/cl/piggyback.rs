@@ -7,7 +7,13 @@
 //! `ours` does). Recall is bit-identical after any later task; a task can only
 //! switch base weights off, which is the loss of plasticity the paper reports.
 //!
-//! Settings: `[method.piggyback]` `threshold`, `init`.
+//! The scores step at their own Adam rate `lr` (1e-4, the rate Mallya et al.
+//! train masks at; `Param::fixed_learning_rate`), not at PPO's KL-adapted one:
+//! at the optimiser's rate (about 1e-3) the first update moved scores across
+//! the 5e-3 margin between `init` and `threshold` and scrambled the base's gait
+//! (issue 39). `lr = 0` restores that.
+//!
+//! Settings: `[method.piggyback]` `threshold`, `init`, `lr`.
 
 use super::method::ContinualMethod;
 use super::ours::Switches;
@@ -24,11 +30,13 @@ pub struct PiggybackConfig {
     pub threshold: f64,
     /// Every score when a task starts.
     pub init: f64,
+    /// The scores' own Adam learning rate; 0: the PPO optimiser's rate.
+    pub lr: f64,
 }
 
 impl Default for PiggybackConfig {
     fn default() -> Self {
-        Self { threshold: 5e-3, init: 1e-2 }
+        Self { threshold: 5e-3, init: 1e-2, lr: 1e-4 }
     }
 }
 
@@ -37,6 +45,7 @@ impl PiggybackConfig {
     pub fn validate(&self) -> anyhow::Result<()> {
         bounds::check("[method.piggyback] threshold", self.threshold, Interval::Finite)?;
         bounds::check("[method.piggyback] init", self.init, Interval::Finite)?;
+        bounds::check("[method.piggyback] lr", self.lr, bounds::UNIT)?;
         anyhow::ensure!(
             self.init > self.threshold,
             "[method.piggyback] init = {} must exceed threshold = {}: every mask element would start off, \
@@ -76,6 +85,7 @@ impl ContinualMethod for Piggyback {
         let m = MaskConfig {
             piggyback_threshold: self.cfg.threshold,
             piggyback_init: self.cfg.init,
+            piggyback_learning_rate: self.cfg.lr,
             ..without_plasticity_mechanisms(base, SelectionRule::Piggyback)
         };
         m.validate()?;

@@ -220,6 +220,9 @@ pub struct MaskConfig {
     pub piggyback_threshold: f64,
     /// Piggyback: every score's value when a task starts.
     pub piggyback_init: f64,
+    /// Piggyback: the scores' own Adam learning rate (Mallya et al. train the mask at 1e-4
+    /// with the weights fixed); 0 steps them at the PPO optimiser's (KL-adapted) rate.
+    pub piggyback_learning_rate: f64,
     /// Whether the soft scores of occupied elements train too (one reading of METHOD.md 2.2's
     /// straight-through gradient); off: only vacant elements' scores move, occupied ones keep
     /// the ranking the task started with (its transfer bonus included).
@@ -256,6 +259,7 @@ impl Default for MaskConfig {
             packnet_prune_at: None,
             piggyback_threshold: 5e-3,
             piggyback_init: 1e-2,
+            piggyback_learning_rate: 1e-4,
             score_grad_occupied: true,
             bias_start: BiasStart::Previous,
         }
@@ -312,6 +316,19 @@ impl MaskConfig {
         }
     }
 
+    /// Fills in what a saved mask configuration from before issue 39 left out: Piggyback's
+    /// scores then stepped at the PPO optimiser's rate, so a Piggyback `mask` object without
+    /// `piggyback_learning_rate` gets 0 (that rate) instead of today's default; under any other
+    /// rule the rate never acts and the default stands (a resumed run compares equal). For
+    /// checkpoints and manifests, which record a run. Anything but a JSON object is left as it is.
+    pub fn fill_in_pre_issue_39(mask: &mut serde_json::Value) {
+        if let Some(m) = mask.as_object_mut() {
+            if m.get("rule").and_then(|r| r.as_str()) == Some("piggyback") {
+                m.entry("piggyback_learning_rate").or_insert(0.0.into());
+            }
+        }
+    }
+
     /// Checks the ranges of every field and the relations between them; the error names the
     /// key and the expected range.
     pub fn validate(&self) -> anyhow::Result<()> {
@@ -336,6 +353,7 @@ impl MaskConfig {
             ("packnet_keep", self.packnet_keep, POSITIVE_UNIT),
             ("piggyback_threshold", self.piggyback_threshold, Interval::Finite),
             ("piggyback_init", self.piggyback_init, Interval::Finite),
+            ("piggyback_learning_rate", self.piggyback_learning_rate, UNIT),
         ] {
             bounds::check(&key(name), v, interval)?;
         }
@@ -388,6 +406,19 @@ pub fn row_quota(capacity: f64, fan_in: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_saved_piggyback_mask_without_a_score_rate_is_read_as_it_ran_at_the_optimisers() {
+        let mut old = serde_json::json!({ "rule": "piggyback" });
+        MaskConfig::fill_in_pre_issue_39(&mut old);
+        let m: MaskConfig = serde_json::from_value(old).unwrap();
+        assert_eq!(m.piggyback_learning_rate, 0.0);
+        // Under another rule the rate never acted: the default stands, so a resume compares equal.
+        let mut other = serde_json::json!({ "rule": "split" });
+        MaskConfig::fill_in_pre_issue_39(&mut other);
+        let m: MaskConfig = serde_json::from_value(other).unwrap();
+        assert_eq!(m.piggyback_learning_rate, MaskConfig::default().piggyback_learning_rate);
+    }
 
     #[test]
     fn a_saved_mask_without_a_sigma_scale_is_read_as_it_ran_in_score_units() {

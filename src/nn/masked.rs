@@ -378,7 +378,11 @@ impl MaskedLinear {
         };
         let mut out = vec![p("weight", &self.weight, t.weight_update.as_ref())];
         if !t.repeat {
-            out.push(p("score", &self.score_mean, t.score_update.as_ref()));
+            // Piggyback's scores step at their own rate where one is set (Mallya et al.'s mask rate).
+            let score_rate = self.cfg.piggyback_learning_rate;
+            let fixed_learning_rate =
+                (self.cfg.rule == SelectionRule::Piggyback && score_rate > 0.0).then_some(score_rate);
+            out.push(Param { fixed_learning_rate, ..p("score", &self.score_mean, t.score_update.as_ref()) });
             if t.iteration < self.cfg.entropy_iterations {
                 let rate = self.cfg.sigma_learning_rate;
                 let fixed_learning_rate = (rate > 0.0).then_some(rate);
