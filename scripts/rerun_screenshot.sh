@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's picture of the Rerun viewer: records 10 s of a policy on a task
+# The picture of the Rerun viewer in docs/recordings.md: records 10 s of a policy on a task
 # as .rrd, opens it in the viewer on a virtual display (software rendering)
 # and saves a screenshot.
 #   scripts/rerun_screenshot.sh [POLICY] [TASK] [OUT.png]

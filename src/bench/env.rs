@@ -62,7 +62,7 @@ pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Va
     let actions = gait_actions(cfg.policy_dt());
 
     let one = one_env_rate(&cfg, &robot, &actions, seconds)?;
-    // The same at MuJoCo's reference setting (0.005 s x 4), for the ratio in the README.
+    // The same at MuJoCo's reference setting (0.005 s x 4), for the ratio in docs/simulator.md.
     let reference = EnvConfig { physics_dt: 0.005, decimation: 4, ..cfg.clone() };
     let one_reference = one_env_rate(&reference, &robot, &actions, seconds)?;
 

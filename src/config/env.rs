@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 pub struct EnvConfig {
     /// Robot description, relative to the crate root (or absolute).
     pub urdf: String,
-    /// Physics step in seconds. Chosen by measurement (README, "Simulator"):
+    /// Physics step in seconds. Chosen by measurement (docs/simulator.md):
     /// with the PD law implicit in rapier's multibody dynamics, 0.01 s stands
     /// and moves like 0.005 s (height, tracking, falls) at twice the speed;
     /// 0.02 s lets feet sink up to 6 cm and changes how the robot falls. In (0, 0.1].
@@ -180,7 +180,7 @@ impl Default for EnvConfig {
 }
 
 /// The largest physics step, seconds: 0.02 s already lets the A1's feet sink
-/// up to 6 cm (README, "Simulator").
+/// up to 6 cm (docs/simulator.md).
 pub const MAX_PHYSICS_DT: f32 = 0.1;
 /// The most physics steps per policy step.
 pub const MAX_DECIMATION: usize = 1000;
