@@ -179,3 +179,22 @@ fn every_mask_baseline_runs_the_smoke_sequence_and_forgets_nothing() {
         );
     }
 }
+
+/// Issue 36: the smoke sequence on the aliengo (`scenes/smoke-aliengo.toml`) trains on the robot
+/// files of the fuzz corpus that ROS packages ship: one with `<transmission>`, `<gazebo>` and
+/// `<ros2_control>` blocks, one whose `package://` and `file://` meshes resolve nowhere.
+#[test]
+fn the_smoke_sequence_trains_on_robot_files_with_ros_extensions_and_unresolved_meshes() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let aliengo = std::fs::read_to_string(root.join("scenes/smoke-aliengo.toml")).unwrap();
+    assert!(aliengo.contains("urdf = \"scenes/aliengo.urdf\""));
+    let tmp = tempfile::tempdir().unwrap();
+    for file in ["ros-extensions", "unresolved-meshes"] {
+        let config = tmp.path().join(format!("{file}.toml"));
+        let urdf = format!("urdf = \"tests/fuzz_corpus/{file}.urdf\"");
+        std::fs::write(&config, aliengo.replace("urdf = \"scenes/aliengo.urdf\"", &urdf)).unwrap();
+        let m = run(&config, &tmp.path().join(file), RunOptions::default()).unwrap();
+        assert_eq!(m.completed_steps, 3, "{file}");
+        assert_eq!(m.summary.forgetting, Some(0.0), "{file}");
+    }
+}

@@ -339,3 +339,59 @@ fn xacro_leftovers_in_comments_and_a_byte_order_mark_load_and_stand() {
     assert!((robot.total_mass - plain.total_mass).abs() < 1e-9, "{} against {}", robot.total_mass, plain.total_mass);
     assert_stands(&cfg, &robot);
 }
+
+/// Issue 36: `package://` and `file://` mesh paths that resolve nowhere (a file copied out of
+/// its ROS package). The file loads as the aliengo it was made from (same joints and mass), the
+/// thighs with only a mesh get their inertia box, the others keep their primitives, one warning
+/// per mesh, and it stands.
+#[test]
+fn unresolved_package_and_file_mesh_paths_fall_back_and_the_robot_stands() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cfg = quadcl::engine::RunConfig::load(&root.join("scenes/aliengo.toml")).unwrap().config.env;
+    let plain = RobotModel::for_config(&cfg).unwrap();
+    cfg.urdf = root.join("tests/fuzz_corpus/unresolved-meshes.urdf").display().to_string();
+    let robot = RobotModel::for_config(&cfg).unwrap();
+    assert!((robot.total_mass - plain.total_mass).abs() < 1e-9);
+    let names = |r: &RobotModel| r.joints.iter().map(|j| j.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&robot), names(&plain));
+    let link = |name: &str| robot.urdf.links.iter().find(|l| l.name == name).unwrap();
+    use rapier3d_urdf::urdf_rs::Geometry;
+    for thigh in ["FR_thigh", "RL_thigh"] {
+        let c = &link(thigh).collision;
+        assert!(c.len() == 1 && matches!(c[0].geometry, Geometry::Box { .. }), "{thigh}: {c:?}");
+    }
+    // (The calf also holds its foot's sphere, merged from the foot link.)
+    for (name, kept, n) in [("FL_thigh", "box", 1), ("RR_thigh", "box", 1), ("FL_calf", "cylinder", 2)] {
+        let c = &link(name).collision;
+        assert_eq!(c.len(), n, "{name}: {c:?}");
+        let ok = match kept {
+            "box" => matches!(c[0].geometry, Geometry::Box { .. }),
+            _ => matches!(c[0].geometry, Geometry::Cylinder { .. }),
+        };
+        assert!(ok, "{name} keeps its {kept}: {c:?}");
+    }
+    let w = &robot.warnings;
+    let inertia = w.iter().filter(|w| w.contains("package://") && w.contains("box of the link's inertia")).count();
+    let dropped = w.iter().filter(|w| w.contains("file://") && w.contains("other collision shapes are used")).count();
+    assert_eq!((inertia, dropped, w.len()), (2, 3, 5), "{w:#?}");
+    assert_stands(&cfg, &robot);
+}
+
+/// Issue 36: the ROS extensions (`<transmission>` naming every joint, `<ros2_control>`,
+/// `<gazebo>` blocks, one with a `<link>` and a `<joint>` inside a plugin, xacro leftovers in
+/// them) are skipped unread, silently: the robot is the aliengo it was made from, and stands.
+#[test]
+fn transmission_gazebo_and_ros2_control_blocks_are_skipped_and_the_robot_stands() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cfg = quadcl::engine::RunConfig::load(&root.join("scenes/aliengo.toml")).unwrap().config.env;
+    let plain = RobotModel::for_config(&cfg).unwrap();
+    cfg.urdf = root.join("tests/fuzz_corpus/ros-extensions.urdf").display().to_string();
+    let robot = RobotModel::for_config(&cfg).unwrap();
+    assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
+    assert!((robot.total_mass - plain.total_mass).abs() < 1e-9, "the plugin's 100 kg link is not a link");
+    let links = |r: &RobotModel| r.urdf.links.iter().map(|l| l.name.clone()).collect::<Vec<_>>();
+    let joints = |r: &RobotModel| r.urdf.joints.iter().map(|j| j.name.clone()).collect::<Vec<_>>();
+    assert_eq!(links(&robot), links(&plain));
+    assert_eq!(joints(&robot), joints(&plain));
+    assert_stands(&cfg, &robot);
+}

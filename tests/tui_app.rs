@@ -243,3 +243,29 @@ fn the_event_loop_runs_on_a_test_backend_with_scripted_keys_until_q() {
     assert_eq!(app.messages.last().unwrap(), "stopping: writing the results ...");
     assert!(tmp.path().join("run/metrics.json").exists());
 }
+
+#[test]
+fn z_zooms_the_masks_into_a_layer_and_arrows_scroll_the_matrix_on_the_evaluation_screen() {
+    use quadcl::tui::input::key_action;
+    use quadcl::tui::mask_zoom::ZoomMove;
+    use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+    let key = |app: &quadcl::tui::App, code| key_action(app, &KeyEvent::new(code, KeyModifiers::NONE));
+    let mut app = quadcl::tui::App::new("run".into(), (120, 40), quadcl::tui::Clock::Ticks(0));
+    app.update(Action::Show(Screen::Evaluation));
+    assert!(matches!(key(&app, KeyCode::Right), Some(Action::MatrixScroll(1))));
+    assert!(matches!(key(&app, KeyCode::Char('h')), Some(Action::MatrixScroll(-1))));
+    assert!(key(&app, KeyCode::PageDown).is_none(), "no zoom: page keys do nothing");
+    assert!(matches!(key(&app, KeyCode::Char('z')), Some(Action::Zoom(ZoomMove::Toggle))));
+    app.update(Action::Zoom(ZoomMove::Toggle));
+    assert_eq!((app.screen, app.focus), (Screen::Overview, Panel::Masks), "z shows the masks");
+    assert!(app.zoom.is_some());
+    assert!(matches!(key(&app, KeyCode::PageDown), Some(Action::Zoom(ZoomMove::Rows(1)))));
+    assert!(matches!(key(&app, KeyCode::PageUp), Some(Action::Zoom(ZoomMove::Rows(-1)))));
+    assert!(matches!(key(&app, KeyCode::Char(']')), Some(Action::Zoom(ZoomMove::Layer(1)))));
+    assert!(matches!(key(&app, KeyCode::Left), Some(Action::Zoom(ZoomMove::Columns(-1)))));
+    assert!(matches!(key(&app, KeyCode::Esc), Some(Action::Zoom(ZoomMove::Toggle))));
+    app.update(Action::Zoom(ZoomMove::Toggle));
+    assert!(app.zoom.is_none());
+    let help: Vec<&str> = quadcl::tui::panels::help::KEYS.iter().map(|(k, _)| *k).collect();
+    assert!(help.contains(&"z") && help.iter().any(|k| k.contains("PgUp")) && help.iter().any(|k| k.contains("← →")));
+}

@@ -4,11 +4,14 @@
 //! at 120x40 and 80x24 with the masks of `crash:FL`, the evaluation matrix,
 //! the next-task controls, the help overlay, the robot panel with a
 //! simulated frame, and what a resize to too small a terminal shows. The
-//! Sweep screen on the committed sweep fixture (`tests/sweep_fixture`).
+//! Sweep screen on the committed sweep fixture (`tests/sweep_fixture`). The
+//! Masks panel zoomed into one layer, and the Evaluation screen after twelve
+//! learned tasks (a toy-learner run) at 120x40 and 80x24.
 
 mod tui_common;
+use quadcl::tui::mask_zoom::ZoomMove;
 use quadcl::tui::{Action, Screen, WorkerMsg};
-use tui_common::{act, open_shipped, root, screen};
+use tui_common::{act, open_shipped, pump, root, screen};
 
 macro_rules! snap {
     ($name:expr, $text:expr) => {
@@ -35,6 +38,26 @@ fn the_shipped_run_opens_on_every_screen() {
     assert_eq!(app.selected().unwrap().task, "crash:FL");
     snap!("overview_crash_fl_120x40", screen(&app, 120, 40, hide));
     snap!("overview_crash_fl_80x24", screen(&app, 80, 24, hide));
+    // Zoomed into actor.l0 (512 x 64: every input of a row fits), then actor.l1 (256 x 512), a
+    // page down and a page right.
+    app.update(Action::Zoom(ZoomMove::Toggle));
+    let zoomed = screen(&app, 120, 40, hide);
+    assert!(
+        zoomed.contains("actor.l0 512x64") && zoomed.contains("rows 1-19 of 512 (PgUp/PgDn) · all 64 inputs"),
+        "{zoomed}"
+    );
+    snap!("masks_zoom_actor_l0_120x40", zoomed);
+    app.update(Action::Zoom(ZoomMove::Layer(1)));
+    app.update(Action::Zoom(ZoomMove::Rows(1)));
+    app.update(Action::Zoom(ZoomMove::Columns(1)));
+    let paged = screen(&app, 120, 40, hide);
+    assert!(
+        paged.contains("actor.l1 256x512") && paged.contains("rows 20-38 of 256 (PgUp/PgDn) · inputs 113-224 of 512"),
+        "{paged}"
+    );
+    snap!("masks_zoom_actor_l1_paged_120x40", paged);
+    app.update(Action::Zoom(ZoomMove::Toggle));
+    assert!(app.zoom.is_none());
     // Each panel alone, at the size it has on a 120x40 screen.
     use quadcl::tui::panels;
     type Draw = fn(&mut ratatui::Frame, ratatui::layout::Rect, &quadcl::tui::App, bool);
@@ -84,6 +107,50 @@ fn the_shipped_run_opens_on_every_screen() {
     let file = std::io::BufReader::new(std::fs::File::open(&episode).unwrap());
     let messages = re_log_encoding::DecoderApp::decode_lazy(file).collect::<Result<Vec<_>, _>>().unwrap();
     assert!(messages.len() > 10, "a complete recording: {} messages", messages.len());
+    worker.shutdown();
+}
+
+#[test]
+fn twelve_learned_tasks_show_every_task_column_at_120x40_and_scroll_at_80x24() {
+    let tmp = tempfile::tempdir().unwrap();
+    let config = tmp.path().join("twelve.toml");
+    std::fs::write(&config, tui_common::twelve_task_run()).unwrap();
+    let spec = quadcl::tui::OpenSpec { run_dir: tmp.path().join("run"), config: Some(config), continues: None };
+    let (mut app, mut worker) = tui_common::open(spec, (120, 40));
+    let hide = tmp.path();
+    let steps = |a: &quadcl::tui::App| a.opened.as_ref().map_or(0, |o| o.results.steps.len());
+    app.update(Action::ToggleRunThrough);
+    app.update(Action::StartPause);
+    for _ in 0..12 {
+        pump(&mut app, &mut worker, |a| steps(a) == 12 || a.live.is_some());
+        pump(&mut app, &mut worker, |a| steps(a) == 12 || a.live.is_none());
+        if steps(&app) == 12 {
+            break;
+        }
+    }
+    pump(&mut app, &mut worker, |a| steps(a) == 12 && a.paused && a.summary.is_some());
+    app.update(Action::Show(Screen::Evaluation));
+    let tasks = app.opened.as_ref().unwrap().results.tasks.clone();
+    assert_eq!(tasks.len(), 12);
+    let wide = screen(&app, 120, 40, hide);
+    let head = wide.lines().nth(2).unwrap();
+    for t in &tasks {
+        assert!(head.contains(&quadcl::tui::panels::short_task(t)), "{t} missing from {head}");
+    }
+    snap!("evaluation_twelve_tasks_120x40", wide);
+    // At 80x24 a window of the columns, marked, holding the selected (last) step's task.
+    app.update(Action::Resize(80, 24));
+    let narrow = screen(&app, 80, 24, hide);
+    assert!(narrow.contains("◂") && narrow.contains(" of 12 ←→") && narrow.contains("iRR"), "{narrow}");
+    snap!("evaluation_twelve_tasks_80x24", narrow);
+    // Scrolling left reaches the first column; the window then marks more on the right.
+    (0..12).for_each(|_| app.update(Action::MatrixScroll(-1)));
+    let left = screen(&app, 80, 24, hide);
+    assert!(left.contains("tasks 1-") && left.contains("▸") && left.contains("cFL"), "{left}");
+    snap!("evaluation_twelve_tasks_80x24_scrolled_left", left);
+    // Selecting a step follows its task again.
+    app.update(Action::CursorUp);
+    assert_eq!(app.matrix_scroll, None);
     worker.shutdown();
 }
 

@@ -4,6 +4,7 @@
 //!
 //! - `method`: [`ContinualMethod`], hooks around one training loop, and the method by name;
 //! - `ours`: the paper's method and its [`Switches`];
+//! - `capacity`: how long each layer's vacant elements last at given switches (the Next task panel's forecast);
 //! - `wsn`: WSN, `ours` with the per-layer rule and its plasticity mechanisms off;
 //! - `packnet`, `piggyback`: the other mask baselines (their rules live in `nn/masked/baselines.rs`);
 //! - `finetune`, `ewc`, `si`, `rwalk`, `er`, `agem`: the baselines on the dense network (METHOD.md 3);
@@ -13,6 +14,7 @@
 //! - `metrics`: the evaluation matrix [`EvalMatrix`] and the measures on it.
 
 mod agem;
+mod capacity;
 mod er;
 mod ewc;
 mod finetune;
@@ -29,6 +31,7 @@ mod si;
 mod wsn;
 
 pub use agem::{project, Agem, AgemHooks};
+pub use capacity::{forecast, vacant_taken, LayerForecast};
 pub use er::{Er, ErConfig, ErHooks};
 pub use ewc::{diagonal_fisher, Ewc, EwcConfig, EwcHooks};
 pub use finetune::Finetune;

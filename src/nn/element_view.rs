@@ -88,6 +88,53 @@ pub struct LayerView {
     pub counts: [usize; 6],
 }
 
+/// How much of one row (an output neuron) a task took: the counts of its elements the task
+/// selects, split by where they came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RowShare {
+    /// The row (output index).
+    pub row: usize,
+    /// Selected elements that were vacant (private to the task included).
+    pub from_vacant: usize,
+    /// Selected elements that earlier tasks occupied.
+    pub from_occupied: usize,
+}
+
+impl RowShare {
+    pub fn selected(&self) -> usize {
+        self.from_vacant + self.from_occupied
+    }
+}
+
+impl LayerView {
+    /// Every row's share, in row order.
+    pub fn row_shares(&self) -> Vec<RowShare> {
+        let cols = self.shape[1];
+        (0..self.shape[0])
+            .map(|row| {
+                let codes = &self.codes[row * cols..(row + 1) * cols];
+                let count =
+                    |views: &[ElementView]| codes.iter().filter(|c| views.iter().any(|v| **c == *v as u8)).count();
+                RowShare {
+                    row,
+                    from_vacant: count(&[ElementView::SelectedFromVacant, ElementView::PrivateToTask]),
+                    from_occupied: count(&[ElementView::SelectedFromOccupied]),
+                }
+            })
+            .collect()
+    }
+
+    /// The rows ordered by how much of them the task took: most selected first, then most
+    /// taken from vacant elements, then by row.
+    pub fn rows_by_share(&self) -> Vec<RowShare> {
+        let mut rows = self.row_shares();
+        rows.sort_by(|a, b| {
+            b.selected().cmp(&a.selected()).then(b.from_vacant.cmp(&a.from_vacant)).then(a.row.cmp(&b.row))
+        });
+        rows
+    }
+}
+
 /// How many elements of one layer the transfer bonus lifts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LayerLift {
@@ -153,4 +200,21 @@ pub fn transfer_lift(networks: &[&MaskedMlp], related: &[TaskId]) -> Vec<LayerLi
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_are_ordered_by_the_share_the_task_took_then_by_what_was_vacant() {
+        // 3 rows of 4: row 0 one selected (occupied), row 1 three (two vacant, one private),
+        // row 2 one selected from vacant.
+        let codes = vec![4, 0, 1, 2, 3, 3, 5, 0, 0, 3, 1, 1];
+        let view = LayerView { network: "n".into(), layer: "n.l0".into(), shape: [3, 4], codes, counts: [0; 6] };
+        let order: Vec<usize> = view.rows_by_share().iter().map(|r| r.row).collect();
+        assert_eq!(order, [1, 2, 0]);
+        assert_eq!(view.row_shares()[1], RowShare { row: 1, from_vacant: 3, from_occupied: 0 });
+        assert_eq!(view.row_shares()[0].selected(), 1);
+    }
 }

@@ -42,7 +42,7 @@ pub use crate::config::net::{
 pub use bitmask::BitMask;
 pub use checkpoint::{load_policy, save_policy, Policy};
 pub use dense::{DenseLayer, DenseMlp};
-pub use element_view::{mask_views, transfer_lift, ElementView, LayerLift, LayerView};
+pub use element_view::{mask_views, transfer_lift, ElementView, LayerLift, LayerView, RowShare};
 pub use fused::fused_mlp;
 pub use masked::{LayerIteration, MaskedLinear};
 pub use mlp::{FrozenWeights, MaskedMlp};
@@ -50,7 +50,7 @@ pub use network::{AsNetworkRef, IterationNoise, Network, NetworkRef};
 pub use optim::{AdamConfig, MaskedAdam, Moments};
 pub use plasticity_probe::SelectedWeights;
 pub use product::MatrixProduct;
-pub use select::row_quota;
+pub use select::{row_quota, split_counts, vacant_quota};
 pub use state::{ElementState, IllegalTransition, TaskId};
 pub use stats::{mask_report, LayerMasks, MaskReport, NetworkMasks, TaskMask};
 

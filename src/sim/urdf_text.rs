@@ -8,8 +8,12 @@
 //!   too where they cannot change the dynamics (inside `<visual>`), and are an
 //!   error everywhere else (two different masses have no right answer).
 //! - Elements the format does not know inside `<robot>`, `<link>` and
-//!   `<joint>` are dropped (ROS extensions `<gazebo>` and `<transmission>`
-//!   silently, anything else with a warning).
+//!   `<joint>` are dropped (the ROS extensions `<gazebo>`, `<transmission>` and
+//!   `<ros2_control>` silently, anything else with a warning). What those
+//!   extensions hold is never read: a `<joint>` a transmission names is not a
+//!   joint, a `<link>` inside a Gazebo plugin is not a link, and their numbers
+//!   and xacro leftovers are not checked (ROS's parser and MuJoCo's importer
+//!   skip them the same way).
 //! - A number that does not parse is an error naming its line and attribute;
 //!   a xacro expression (`$(arg X)`, `${...}`) is one too, saying the file needs
 //!   `xacro` first. Comments, processing instructions and CDATA are not markup:
@@ -21,8 +25,10 @@
 use anyhow::{anyhow, bail};
 use xml::{Element, Xml};
 
-/// Children `<robot>` may have; `gazebo` and `transmission` are dropped silently.
-const ROBOT_CHILDREN: [&str; 5] = ["link", "joint", "material", "gazebo", "transmission"];
+/// Children `<robot>` may have; the [`ROS_EXTENSIONS`] are dropped silently.
+const ROBOT_CHILDREN: [&str; 6] = ["link", "joint", "material", "gazebo", "transmission", "ros2_control"];
+/// ROS's extensions to URDF, for other tools (Gazebo, ros_control): dropped wherever they are, unread.
+const ROS_EXTENSIONS: [&str; 3] = ["gazebo", "transmission", "ros2_control"];
 /// Children a `<link>` may have (any number of visuals and collisions).
 const LINK_CHILDREN: [&str; 3] = ["inertial", "visual", "collision"];
 /// Children a `<joint>` may have, each at most once.
@@ -38,7 +44,7 @@ const NUMERIC_ATTRIBUTES: [&str; 17] = [
 /// Cleans URDF text; pushes one line per tolerated problem onto `warnings`.
 pub(super) fn tolerant_urdf_text(text: &str, warnings: &mut Vec<String>) -> anyhow::Result<String> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    if let Some(bad) = find_bad_number(&blank_non_markup(text)) {
+    if let Some(bad) = find_bad_number(&blank_elements(&blank_non_markup(text), &ROS_EXTENSIONS)) {
         bail!("bad number: {bad}");
     }
     let mut robot: Element = text.parse().map_err(|e| anyhow!("malformed URDF: {e}"))?;
@@ -46,7 +52,7 @@ pub(super) fn tolerant_urdf_text(text: &str, warnings: &mut Vec<String>) -> anyh
         bail!("malformed URDF: the root element is <{}>, expected <robot>", robot.name);
     }
     keep_known(&mut robot, "robot", &ROBOT_CHILDREN, warnings);
-    robot.children.retain(|c| !matches!(c, Xml::ElementNode(e) if e.name == "gazebo" || e.name == "transmission"));
+    robot.children.retain(|c| !matches!(c, Xml::ElementNode(e) if ROS_EXTENSIONS.contains(&e.name.as_str())));
     for child in elements_mut(&mut robot) {
         let owner = format!("{} '{}'", child.name, child.get_attribute("name", None).unwrap_or("?"));
         match child.name.as_str() {
@@ -79,11 +85,14 @@ fn elements_mut(e: &mut Element) -> impl Iterator<Item = &mut Element> {
     })
 }
 
-/// Drops the children of `e` whose name is not in `known`, with a warning each.
+/// Drops the children of `e` whose name is not in `known`, with a warning each (ROS extensions
+/// without one).
 fn keep_known(e: &mut Element, owner: &str, known: &[&str], warnings: &mut Vec<String>) {
     e.children.retain(|c| match c {
         Xml::ElementNode(child) if !known.contains(&child.name.as_str()) => {
-            warnings.push(format!("{owner}: unknown element <{}> ignored", child.name));
+            if !ROS_EXTENSIONS.contains(&child.name.as_str()) {
+                warnings.push(format!("{owner}: unknown element <{}> ignored", child.name));
+            }
             false
         }
         _ => true,
@@ -172,6 +181,38 @@ fn blank_non_markup(text: &str) -> String {
         rest = &rest[span_end..];
     }
     out.push_str(rest);
+    out
+}
+
+/// `text` with every element named in `names` blanked out as [`blank_non_markup`] does, from
+/// its start tag through its end tag (or its self-closing tag alone). One that is never closed
+/// is left for the XML parser to report.
+fn blank_elements(text: &str, names: &[&str]) -> String {
+    let mut out = text.to_string();
+    for name in names {
+        let open = format!("<{name}");
+        let close = format!("</{name}");
+        let mut from = 0;
+        while let Some(at) = out[from..].find(&open).map(|i| from + i) {
+            let after = at + open.len();
+            let boundary = out[after..].chars().next().is_some_and(|c| c.is_whitespace() || c == '>' || c == '/');
+            let Some(tag_end) = out[after..].find('>').map(|i| after + i) else { break };
+            let end = if !boundary {
+                None
+            } else if out[..tag_end].ends_with('/') {
+                Some(tag_end + 1)
+            } else {
+                out[tag_end..].find(&close).and_then(|i| out[tag_end + i..].find('>').map(|j| tag_end + i + j + 1))
+            };
+            let Some(end) = end else {
+                from = after;
+                continue;
+            };
+            let blank: String = out[at..end].chars().map(|c| if c == '\n' { '\n' } else { ' ' }).collect();
+            out.replace_range(at..end, &blank);
+            from = at + blank.len();
+        }
+    }
     out
 }
 
@@ -275,6 +316,28 @@ mod tests {
             <joint name=\"j\" type=\"fixed\"><origin xyz=\"$(arg x) 0 0\"/></joint></robot>";
         let err = format!("{:#}", clean(text).0.unwrap_err());
         assert!(err.contains("line 2") && err.contains("${mass}") && err.contains("run `xacro`"), "{err}");
+    }
+
+    #[test]
+    fn ros_extensions_are_dropped_unread_wherever_they_are() {
+        let text = "<robot name=\"r\">\n<gazebo reference=\"${prefix}_foot\"><kp value=\"big\"/></gazebo>\n\
+            <transmission name=\"t\"><joint name=\"ghost\"><hardwareInterface>x</hardwareInterface></joint>\n\
+            <mechanicalReduction value=\"$(arg r)\"/></transmission>\n<gazebo/>\n\
+            <ros2_control name=\"s\" type=\"system\"><joint name=\"ghost2\"/></ros2_control>\n\
+            <link name=\"a\"><gazebo><link name=\"fake\"/></gazebo><inertial><mass value=\"1\"/>\n\
+            <inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link></robot>";
+        let (out, warnings) = clean(text);
+        let out = out.unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let robot = rapier3d_urdf::urdf_rs::read_from_string(&out).unwrap_or_else(|e| panic!("{e}\n{out}"));
+        assert_eq!(robot.links.iter().map(|l| l.name.as_str()).collect::<Vec<_>>(), ["a"]);
+        assert!(robot.joints.is_empty(), "{:?}", robot.joints);
+        // Outside them, a bad number is still an error naming its line (counted through the blanked blocks).
+        let bad = text.replace("<mass value=\"1\"/>", "<mass value=\"${m}\"/>");
+        let err = format!("{:#}", clean(&bad).0.unwrap_err());
+        assert!(err.contains("line 7") && err.contains("${m}"), "{err}");
+        // A name that only starts like an extension's is not one.
+        assert_eq!(blank_elements("<gazebos a=\"1\"/>", &ROS_EXTENSIONS), "<gazebos a=\"1\"/>");
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! computes no measure itself: results, evaluation matrix, summary, mask
 //! statistics and element views all come from engine events.
 
+use super::mask_zoom::{MaskZoom, ZoomMove};
 use super::next_task::NextTask;
 pub use super::panels::curves::CurveMetric;
 use super::timeline::{rows, Row};
@@ -65,6 +66,10 @@ pub enum Action {
     SmoothingToggle,
     WholeSequence,
     NetworkNext,
+    /// The mask heatmap zoomed into one layer: in, out, and moves through it.
+    Zoom(ZoomMove),
+    /// The evaluation matrix's task columns one to the right (+1) or left (-1).
+    MatrixScroll(i8),
     ControlUp,
     ControlDown,
     /// Change the control row under the cursor (-1 / +1; 0 toggles).
@@ -159,6 +164,11 @@ pub struct App {
     /// Train the rest of the sequence without pausing after each task.
     pub run_through: bool,
     pub network: usize,
+    /// The Masks panel zoomed into one layer (None: every layer of the network).
+    pub zoom: Option<MaskZoom>,
+    /// The first task column of the evaluation matrix the user scrolled to (None: the window
+    /// follows the selected step's task).
+    pub matrix_scroll: Option<usize>,
     pub next: NextTask,
     pub robot: RobotView,
     pub messages: Vec<String>,
@@ -195,6 +205,8 @@ impl App {
             whole_sequence: false,
             run_through: false,
             network: 0,
+            zoom: None,
+            matrix_scroll: None,
             next: NextTask::default(),
             robot: RobotView::default(),
             messages: Vec::new(),
@@ -292,7 +304,10 @@ impl App {
             Action::NetworkNext => {
                 let n = self.report.as_ref().map_or(1, |r| r.networks.len().max(1));
                 self.network = (self.network + 1) % n;
+                self.zoom = self.zoom.map(|_| MaskZoom::default());
             }
+            Action::Zoom(m) => super::mask_zoom::update(self, m),
+            Action::MatrixScroll(by) => self.scroll_matrix(by),
             Action::ControlUp => self.next.move_cursor(-1, self.opened.as_ref()),
             Action::ControlDown => self.next.move_cursor(1, self.opened.as_ref()),
             Action::ControlChange(dir) => {
@@ -353,6 +368,7 @@ impl App {
         if n == 0 {
             return;
         }
+        self.matrix_scroll = None;
         self.cursor = (self.cursor as isize + by).clamp(0, n as isize - 1) as usize;
         self.follow_selection();
     }
@@ -395,6 +411,22 @@ impl App {
         if self.next.step.is_some() {
             self.send(Command::PreviewTransfer { related, init });
         }
+    }
+
+    /// Moves the matrix's window of task columns from where it is drawn now.
+    fn scroll_matrix(&mut self, by: i8) {
+        let (Some(o), Some(rect)) = (&self.opened, self.panel_rect(Panel::Matrix, Screen::Evaluation)) else { return };
+        let width = super::ui::block("", false).inner(rect).width as usize;
+        let step = self.selected().and_then(|r| r.step);
+        let now = super::panels::matrix::columns(&o.results.eval_matrix, width, self.matrix_scroll, step);
+        self.matrix_scroll =
+            Some((now.first as isize + by as isize).clamp(0, (now.total - now.count) as isize) as usize);
+    }
+
+    /// Where `panel` is on `screen` at the terminal's size.
+    pub fn panel_rect(&self, panel: Panel, screen: Screen) -> Option<ratatui::layout::Rect> {
+        let area = ratatui::layout::Rect::new(0, 0, self.size.0, self.size.1);
+        super::ui::panels(area, screen).into_iter().find(|(p, _)| *p == panel).map(|(_, r)| r)
     }
 
     fn task_id(&self, name: &str) -> Option<usize> {

@@ -2,6 +2,7 @@
 //! is open (help, the quit question, a task being typed) and on the focus.
 
 use super::app::{Action, App, Panel, Screen};
+use super::mask_zoom::ZoomMove;
 use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyEventKind, KeyModifiers, MouseButton, MouseEventKind};
 
 /// The action of a terminal event, if it has one.
@@ -43,6 +44,8 @@ pub fn key_action(app: &App, key: &KeyEvent) -> Option<Action> {
         };
     }
     let controls = app.focus == Panel::Controls;
+    let zoomed = app.zoom.is_some() && app.screen == Screen::Overview;
+    let matrix = app.screen == Screen::Evaluation;
     Some(match key.code {
         KeyCode::Char('q') => Action::Quit,
         KeyCode::Char('?') => Action::ToggleHelp,
@@ -64,6 +67,16 @@ pub fn key_action(app: &App, key: &KeyEvent) -> Option<Action> {
         KeyCode::Char('w') => Action::WholeSequence,
         KeyCode::Char('n') => Action::NetworkNext,
         KeyCode::Char('a') => Action::BeginAddTask,
+        KeyCode::Char('z') => Action::Zoom(ZoomMove::Toggle),
+        KeyCode::Esc if zoomed => Action::Zoom(ZoomMove::Toggle),
+        KeyCode::Char('[') if zoomed => Action::Zoom(ZoomMove::Layer(-1)),
+        KeyCode::Char(']') if zoomed => Action::Zoom(ZoomMove::Layer(1)),
+        KeyCode::PageUp if zoomed => Action::Zoom(ZoomMove::Rows(-1)),
+        KeyCode::PageDown if zoomed => Action::Zoom(ZoomMove::Rows(1)),
+        KeyCode::Left if zoomed => Action::Zoom(ZoomMove::Columns(-1)),
+        KeyCode::Right if zoomed => Action::Zoom(ZoomMove::Columns(1)),
+        KeyCode::Left | KeyCode::Char('h') if matrix => Action::MatrixScroll(-1),
+        KeyCode::Right | KeyCode::Char('l') if matrix => Action::MatrixScroll(1),
         KeyCode::Up | KeyCode::Char('k') if controls => Action::ControlUp,
         KeyCode::Down | KeyCode::Char('j') if controls => Action::ControlDown,
         KeyCode::Up | KeyCode::Char('k') => Action::CursorUp,

@@ -13,6 +13,7 @@
 pub mod app;
 mod events;
 pub mod input;
+pub mod mask_zoom;
 pub mod next_task;
 pub mod panels;
 pub mod sweep_loop;

@@ -132,8 +132,8 @@ pub fn panel_keys(panel: Panel) -> &'static str {
         Panel::Timeline => "↑↓ select step",
         Panel::Training => "space start/pause  r run through  e evaluate  S save",
         Panel::Curves => "m metric  s smoothing on/off  +/- smoothing  w whole sequence",
-        Panel::Masks => "n network",
-        Panel::Matrix => "↑↓ select step  e evaluate",
+        Panel::Masks => "n network  z zoom a layer ([ ] layer, PgUp/PgDn rows, ←→ inputs)",
+        Panel::Matrix => "↑↓ select step  ←→ scroll tasks  e evaluate",
         Panel::Controls => "↑↓ row  ←→ change  enter toggle  a add task",
         Panel::Robot => "v Rerun 3D view",
     }

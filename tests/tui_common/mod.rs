@@ -13,6 +13,29 @@ use std::time::Duration;
 pub const TOY_RUN: &str = "seed = 4\niterations = 6\n[run]\nlearner = \"toy\"\n[net.mask]\nentropy_iterations = 2\n\
 [[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n[[task]]\nname = \"noise:FR\"\n";
 
+/// A toy-learner run of the default sequence's twelve tasks (`scenes/sequence-a1.toml`'s
+/// order), two iterations each.
+pub fn twelve_task_run() -> String {
+    let tasks = [
+        "crash:FL",
+        "invert:RL",
+        "noise:FL",
+        "crash:FR",
+        "noise:RL",
+        "noise:RR",
+        "invert:FR",
+        "crash:RR",
+        "invert:FL",
+        "noise:FR",
+        "crash:RL",
+        "invert:RR",
+    ];
+    let mut run =
+        "seed = 4\niterations = 2\n[run]\nlearner = \"toy\"\n[net.mask]\nentropy_iterations = 1\n".to_string();
+    tasks.iter().for_each(|t| run.push_str(&format!("[[task]]\nname = \"{t}\"\n")));
+    run
+}
+
 /// The repository root (tests run from it; paths in run files are relative to it).
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -2,7 +2,8 @@
 //! to start) beside the one in force (the step training now, or the last);
 //! the forward-transfer composer (mode, related tasks among the learned ones,
 //! the engine's preview of the elements per layer the bonus lifts); a task
-//! string typed to add a step, with its parse error inline.
+//! string typed to add a step, with its parse error inline. Between steps,
+//! the vacant share each layer keeps after the next one (`vacant_forecast`).
 
 use crate::cl::Switches;
 use crate::tui::app::App;
@@ -51,6 +52,7 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
         (method.network_kind() == crate::nn::NetworkKind::Dense).then(|| o.method.clone())
     });
     let mut lines = vec![Line::raw(format!("for {target}"))];
+    let dense_method = dense.clone();
     if let Some(method) = dense {
         lines.push(Line::styled(
             format!("  {method} trains a dense network: the switches below do nothing"),
@@ -77,6 +79,16 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
             Span::styled(format!("{:>12}", p[i]), value.patch(cursor_style(i))),
             Span::raw(format!(" {:>13}", now[i])),
         ]));
+    }
+    match (&next.step, &app.live) {
+        (Some((step, _)), None) if dense_method.is_none() => {
+            lines.extend(super::vacant_forecast::lines(app, *step, &pending, area.width.saturating_sub(2) as usize));
+        }
+        (Some(_), Some(_)) if dense_method.is_none() => lines.push(Line::styled(
+            "  (the vacant-share forecast for the next step shows when this one ends)",
+            Style::new().fg(Color::Gray),
+        )),
+        _ => {}
     }
     let (related, init) = next.related();
     let mode_row = SWITCH_ROWS.len();

@@ -3,7 +3,8 @@
 //! cells (two pixels per cell; each pixel a block of elements, its colour
 //! the states' colours mixed in the block's proportions),
 //! per-layer fractions as bars, a legend, and the task's overlap with every
-//! other task. The element views and statistics are the engine's.
+//! other task. The element views and statistics are the engine's. `z`
+//! zooms into one layer (`mask_zoom`).
 
 use crate::nn::{ElementView, LayerMasks, LayerView};
 use crate::tui::app::App;
@@ -161,7 +162,9 @@ fn dense_summary(app: &App) -> Option<Vec<Line<'static>>> {
     Some(lines)
 }
 
-pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
+/// The selected task's element views grouped by network: the networks in order, the one shown
+/// (`n` cycles), and its layers (empty while the views are not in).
+pub fn network_layers(app: &App) -> (Vec<&str>, &str, Vec<&LayerView>) {
     let task = app.selected().map(|r| r.task).unwrap_or_default();
     let views: Vec<&LayerView> = match &app.views {
         Some((t, _, layers)) if app.opened.as_ref().and_then(|o| o.results.tasks.get(*t)) == Some(&task) => {
@@ -176,6 +179,13 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
         }
     }
     let network = networks.get(app.network % networks.len().max(1)).copied().unwrap_or("");
+    let layers = views.into_iter().filter(|v| v.network == network).collect();
+    (networks, network, layers)
+}
+
+pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
+    let task = app.selected().map(|r| r.task).unwrap_or_default();
+    let (networks, network, layers) = network_layers(app);
     let live = match &app.views {
         Some((_, Some(it), _)) => format!(" · live, iteration {it}"),
         _ => String::new(),
@@ -187,7 +197,7 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
     };
     let inner = block(&title, focused).inner(area);
     f.render_widget(block(&title, focused), area);
-    if views.is_empty() {
+    if layers.is_empty() {
         let text = match dense_summary(app) {
             Some(lines) => Paragraph::new(lines),
             None => Paragraph::new("waiting for the element views ..."),
@@ -195,7 +205,10 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
         f.render_widget(text, inner);
         return;
     }
-    let layers: Vec<&&LayerView> = views.iter().filter(|v| v.network == network).collect();
+    if let Some(zoom) = &app.zoom {
+        super::mask_zoom::draw(f, inner, layers[zoom.layer % layers.len()], zoom);
+        return;
+    }
     let stats = |name: &str| {
         app.report.as_ref().and_then(|r| r.networks.iter().flat_map(|n| &n.layers).find(|l| l.name == name))
     };

@@ -3,6 +3,7 @@
 pub mod controls;
 pub mod curves;
 pub mod help;
+pub mod mask_zoom;
 pub mod masks;
 pub mod matrix;
 pub mod plasticity_series;
@@ -10,6 +11,7 @@ pub mod robot;
 pub mod sweep;
 pub mod timeline;
 pub mod training;
+pub mod vacant_forecast;
 
 use ratatui::style::Color;
 
