@@ -64,6 +64,11 @@ fn every_shipped_config_and_run_file_still_loads() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files: Vec<_> =
         std::fs::read_dir(root.join("scenes")).unwrap().map(|e| e.unwrap().path()).collect::<Vec<_>>();
+    // One level of folders under scenes/ (scenes/tuning/).
+    let folders: Vec<_> = files.iter().filter(|p| p.is_dir()).cloned().collect();
+    for folder in folders {
+        files.extend(std::fs::read_dir(folder).unwrap().map(|e| e.unwrap().path()));
+    }
     for policy in std::fs::read_dir(root.join("policies")).unwrap() {
         let policy = policy.unwrap().path();
         for sub in std::iter::once(policy.clone())
