@@ -329,3 +329,26 @@ fn agem_projection_never_leaves_a_negative_dot_product_with_the_reference() {
     }
     assert!(projected > 50, "only {projected} of 200 random pairs disagreed");
 }
+
+#[test]
+fn piggybacks_settings_in_metrics_json_are_the_ones_its_networks_trained_with() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("run.toml");
+    std::fs::write(&cfg, format!("{TOY}[method.piggyback]\nlr = 3e-4\nthreshold = 4e-3\n")).unwrap();
+    let options = RunOptions { method: Some("piggyback".into()), ..Default::default() };
+    let out = tmp.path().join("piggyback");
+    run(&cfg, &out, options).unwrap();
+    let json = assert_metrics_json_complete(&out);
+    assert_eq!(json["method_settings"]["lr"].as_f64(), Some(3e-4));
+    assert_eq!(json["method_settings"]["threshold"].as_f64(), Some(4e-3));
+    // The checkpoint records each network's mask configuration as it trained.
+    let manifest = out.join("checkpoints/step-01-invert_RR/manifest.json");
+    let manifest: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    let networks = manifest["networks"].as_array().unwrap();
+    assert!(!networks.is_empty());
+    for net in networks {
+        let mask = &net["mask"];
+        assert_eq!((mask["rule"].as_str(), mask["piggyback_learning_rate"].as_f64()), (Some("piggyback"), Some(3e-4)));
+        assert_eq!(mask["piggyback_threshold"].as_f64(), Some(4e-3), "{}", net["name"]);
+    }
+}
