@@ -21,7 +21,7 @@ const BATCH: usize = 64;
 const ACTION_ROWS: usize = 256;
 
 /// Walking-like actions: (ACTION_ROWS, ACT_DIM), 2 Hz trot at 50 Hz plus noise.
-fn gait_actions(policy_dt: f32) -> Vec<f32> {
+pub(crate) fn gait_actions(policy_dt: f32) -> Vec<f32> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
     let mut out = Vec::with_capacity(ACTION_ROWS * ACT_DIM);
     for k in 0..ACTION_ROWS {

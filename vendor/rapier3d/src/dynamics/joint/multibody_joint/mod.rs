@@ -12,19 +12,23 @@ pub use self::multibody_joint_set::{MultibodyJointSet, MultibodyLinkId};
 #[cfg(feature = "alloc")]
 pub use self::multibody_link::MultibodyLink;
 #[cfg(feature = "alloc")]
+pub use self::multibody_mass_factor::MultibodyMassFactor;
+#[cfg(feature = "alloc")]
 pub use self::unit_multibody_joint::{
     unit_joint_friction_constraint, unit_joint_limit_constraint, unit_joint_motor_constraint,
 };
 
 #[cfg(feature = "alloc")]
 mod multibody;
+#[cfg(feature = "alloc")]
+mod multibody_dof_ranges;
 mod multibody_joint_handle;
 #[cfg(feature = "alloc")]
 mod multibody_joint_set;
 #[cfg(feature = "alloc")]
-mod multibody_dof_ranges;
-#[cfg(feature = "alloc")]
 mod multibody_link;
+#[cfg(feature = "alloc")]
+mod multibody_mass_factor;
 #[cfg(feature = "alloc")]
 mod multibody_workspace;
 

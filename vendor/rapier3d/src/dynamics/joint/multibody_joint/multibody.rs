@@ -1,5 +1,6 @@
 use super::multibody_dof_ranges::LinkDofRanges;
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
+use super::multibody_mass_factor::MultibodyMassFactor;
 use super::multibody_workspace::MultibodyWorkspace;
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
@@ -109,26 +110,56 @@ fn resize_zeroed(dst: &mut DVector, len: usize) {
     }
 }
 
-/// `out += jᵀ · mid · j` over the columns of `j` in `ranges` only, where `j` is zero elsewhere:
-/// entry by entry the same operations as `out.quadform(1.0, mid, j, 1.0)`, without the products
-/// that add zero.
-fn quadform_over(
+/// `out += jᵀ · mid · j` over the columns of `j` in `ranges` only (where `j` is zero elsewhere),
+/// upper triangle only (entries `(r, c)` with `r <= c`): `mid` is symmetric.
+fn upper_quadform_over(
     out: &mut DMatrix<Real>,
     mid: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
     j: &Jacobian<Real>,
     ranges: &[(usize, usize)],
 ) {
-    let mut work = SVector::<Real, SPATIAL_DIM>::zeros();
+    let n = out.nrows();
+    let j = j.as_slice();
+    let out = out.as_mut_slice();
     for &(col_first, col_len) in ranges {
         for col in col_first..col_first + col_len {
-            work.gemv(1.0, mid, &j.column(col), 0.0);
+            let j_col = spatial_column(j, col);
+            let work = mid * j_col;
             for &(first, len) in ranges {
-                out.column_mut(col)
-                    .rows_mut(first, len)
-                    .gemv_tr(1.0, &j.columns(first, len), &work, 1.0);
+                for row in first..(first + len).min(col + 1) {
+                    out[col * n + row] += spatial_column(j, row).dot(&work);
+                }
             }
         }
     }
+}
+
+/// `out += aᵀ · b` over the columns of `a` and `b` in `ranges` only (both are zero elsewhere).
+fn tr_mul_add_over(
+    out: &mut DMatrix<Real>,
+    a: &Jacobian<Real>,
+    b: &Jacobian<Real>,
+    ranges: &[(usize, usize)],
+) {
+    let n = out.nrows();
+    let (a, b) = (a.as_slice(), b.as_slice());
+    let out = out.as_mut_slice();
+    for &(col_first, col_len) in ranges {
+        for col in col_first..col_first + col_len {
+            let b_col = spatial_column(b, col);
+            for &(first, len) in ranges {
+                for row in first..first + len {
+                    out[col * n + row] += spatial_column(a, row).dot(&b_col);
+                }
+            }
+        }
+    }
+}
+
+/// Column `c` of a column-major SPATIAL_DIM x n matrix's data.
+#[inline(always)]
+fn spatial_column(data: &[Real], c: usize) -> SVector<Real, SPATIAL_DIM> {
+    SVector::<Real, SPATIAL_DIM>::from_column_slice(&data[c * SPATIAL_DIM..(c + 1) * SPATIAL_DIM])
 }
 
 /// An articulated body simulated using the reduced-coordinates approach.
@@ -151,7 +182,7 @@ pub struct Multibody {
     //       move dofs from/to a format that matches the augmented mass.
     // TODO: use sparse matrices?
     augmented_mass: DMatrix<Real>,
-    inv_augmented_mass: LU<Real, Dyn, Dyn>,
+    inv_augmented_mass: MultibodyMassFactor,
     // The indexing sequence for moving all kinematics degrees of
     // freedoms to the end of the generalized coordinates vector.
     augmented_mass_indices: IndexSequence,
@@ -204,7 +235,7 @@ impl Multibody {
             accelerations: DVector::zeros(0),
             body_jacobians: Vec::new(),
             augmented_mass: DMatrix::zeros(0, 0),
-            inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
+            inv_augmented_mass: MultibodyMassFactor::default(),
             acc_augmented_mass: DMatrix::zeros(0, 0),
             acc_inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
             augmented_mass_indices: IndexSequence::new(),
@@ -412,8 +443,9 @@ impl Multibody {
         self.self_contacts_enabled = enabled;
     }
 
-    /// The inverse augmented mass matrix of this multibody.
-    pub fn inv_augmented_mass(&self) -> &LU<Real, Dyn, Dyn> {
+    /// The factorized augmented mass matrix of this multibody (solve against it with
+    /// [`MultibodyMassFactor::solve_mut`]).
+    pub fn inv_augmented_mass(&self) -> &MultibodyMassFactor {
         &self.inv_augmented_mass
     }
 
@@ -650,24 +682,16 @@ impl Multibody {
                 rb.forces.torque - gyroscopic - rb_inertia * acc.angvel,
             );
             // Jᵀ·f over the link's dofs only (its Jacobian is zero elsewhere).
-            let body_jacobian = &self.body_jacobians[i];
-            let applied_forces = Force::new(rb.forces.force, rb.forces.torque);
+            let body_jacobian = self.body_jacobians[i].as_slice();
+            let external_forces = *external_forces.as_vector();
+            let applied_forces = *Force::new(rb.forces.force, rb.forces.torque).as_vector();
             for &(first, len) in self.dof_ranges.of(i) {
-                let body_jacobian = body_jacobian.columns(first, len);
-                self.accelerations.rows_mut(first, len).gemv_tr(
-                    1.0,
-                    &body_jacobian,
-                    external_forces.as_vector(),
-                    1.0,
-                );
-
-                if check_implicit_coriolis_divergence {
-                    pos_forces.rows_mut(first, len).gemv_tr(
-                        1.0,
-                        &body_jacobian,
-                        applied_forces.as_vector(),
-                        1.0,
-                    );
+                for c in first..first + len {
+                    let j_c = spatial_column(body_jacobian, c);
+                    self.accelerations[c] += j_c.dot(&external_forces);
+                    if check_implicit_coriolis_divergence {
+                        pos_forces[c] += j_c.dot(&applied_forces);
+                    }
                 }
             }
         }
@@ -740,10 +764,14 @@ impl Multibody {
         copy_resized(&mut ws.guard_f, gen_forces);
         copy_resized(&mut ws.guard_f_pos, pos_forces);
         copy_resized(&mut ws.guard_a, &self.accelerations);
-        self.augmented_mass_indices.rearrange_rows(&mut ws.guard_v, true);
-        self.augmented_mass_indices.rearrange_rows(&mut ws.guard_f, true);
-        self.augmented_mass_indices.rearrange_rows(&mut ws.guard_f_pos, true);
-        self.augmented_mass_indices.rearrange_rows(&mut ws.guard_a, true);
+        self.augmented_mass_indices
+            .rearrange_rows(&mut ws.guard_v, true);
+        self.augmented_mass_indices
+            .rearrange_rows(&mut ws.guard_f, true);
+        self.augmented_mass_indices
+            .rearrange_rows(&mut ws.guard_f_pos, true);
+        self.augmented_mass_indices
+            .rearrange_rows(&mut ws.guard_a, true);
         resize_zeroed(&mut ws.guard_m_a, eff_dim);
         resize_zeroed(&mut ws.guard_m_v, eff_dim);
 
@@ -852,29 +880,20 @@ impl Multibody {
                 parent_to_world = parent_link.local_to_world;
 
                 let (link_j, parent_j) = self.body_jacobians.index_mut_const(i, parent_id);
-                let parent_ranges = self.dof_ranges.of(parent_id);
-                for &(first, len) in parent_ranges {
-                    link_j
-                        .columns_mut(first, len)
-                        .copy_from(&parent_j.columns(first, len));
-                }
-                // The parent's Jacobian is zero at this link's own dofs.
-                link_j.columns_mut(link.assembly_id, ndofs).fill(0.0);
-
-                {
-                    let mut link_j_v = link_j.fixed_rows_mut::<DIM>(0);
-                    let parent_j_w = parent_j.fixed_rows::<ANG_DIM>(DIM);
-
-                    let shift_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                    for &(first, len) in parent_ranges {
-                        link_j_v.columns_mut(first, len).gemm(
-                            1.0,
-                            &shift_tr,
-                            &parent_j_w.columns(first, len),
-                            1.0,
-                        );
+                // The parent's Jacobian moved to this link's frame, column by column over the
+                // parent's dofs; it is zero at this link's own dofs.
+                let shift_tr = vect_to_na(link.shift02).gcross_matrix_tr();
+                for &(first, len) in self.dof_ranges.of(parent_id) {
+                    for c in first..first + len {
+                        let parent_w = parent_j.fixed_view::<ANG_DIM, 1>(DIM, c).into_owned();
+                        let v = parent_j.fixed_view::<DIM, 1>(0, c) + shift_tr * parent_w;
+                        link_j.fixed_view_mut::<DIM, 1>(0, c).copy_from(&v);
+                        link_j
+                            .fixed_view_mut::<ANG_DIM, 1>(DIM, c)
+                            .copy_from(&parent_w);
                     }
                 }
+                link_j.columns_mut(link.assembly_id, ndofs).fill(0.0);
             } else {
                 self.body_jacobians[i]
                     .columns_mut(link.assembly_id, ndofs)
@@ -893,16 +912,13 @@ impl Multibody {
 
             {
                 let link_j = &mut self.body_jacobians[i];
-                let (mut link_j_v, link_j_w) =
-                    link_j.rows_range_pair_mut(0..DIM, DIM..DIM + ANG_DIM);
                 let shift_tr = vect_to_na(link.shift23).gcross_matrix_tr();
                 for &(first, len) in self.dof_ranges.of(i) {
-                    link_j_v.columns_mut(first, len).gemm(
-                        1.0,
-                        &shift_tr,
-                        &link_j_w.columns(first, len),
-                        1.0,
-                    );
+                    for c in first..first + len {
+                        let w = link_j.fixed_view::<ANG_DIM, 1>(DIM, c).into_owned();
+                        let v = link_j.fixed_view::<DIM, 1>(0, c) + shift_tr * w;
+                        link_j.fixed_view_mut::<DIM, 1>(0, c).copy_from(&v);
+                    }
                 }
             }
         }
@@ -967,112 +983,78 @@ impl Multibody {
                 }
             }
 
-            #[allow(unused_mut)] // mut is needed for 3D but not for 2D.
-            let mut augmented_inertia = rb_inertia;
-
+            // Derivative of gyroscopic forces: only the accelerations' matrix has it, added
+            // below with the Coriolis terms (`acc = plain + Jᵀ·(coriolis + gyroscopic)·dt`).
             #[cfg(feature = "dim3")]
-            {
-                // Derivative of gyroscopic forces.
-                let gyroscopic_matrix = rb.vels.angvel.gcross_matrix() * rb_inertia
-                    - (rb_inertia * rb.vels.angvel).gcross_matrix();
+            let gyroscopic_matrix = rb.vels.angvel.gcross_matrix() * rb_inertia
+                - (rb_inertia * rb.vels.angvel).gcross_matrix();
 
-                augmented_inertia += gyroscopic_matrix * dt;
-            }
-
-            // TODO: optimize that (knowing the structure of the augmented inertia matrix).
-            // TODO: this could be better optimized in 2D.
+            // The plain mass matrix, once, upper triangle only (mirrored after the loop).
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
             let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
-            #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
-            let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
             let ranges = self.dof_ranges.of(i);
-            quadform_over(
+            upper_quadform_over(
                 &mut self.augmented_mass,
                 &rb_mass_matrix_wo_gyro,
-                body_jacobian,
-                ranges,
-            );
-            quadform_over(
-                &mut self.acc_augmented_mass,
-                &rb_mass_matrix,
                 body_jacobian,
                 ranges,
             );
 
             /*
              *
-             * Coriolis matrix.
+             * Coriolis matrix, column by column over the link's dofs (static-size products:
+             * a generic `gemm` on a 3 x k view costs more in dispatch than in arithmetic).
              *
              */
             let rb_j = &self.body_jacobians[i];
-            let rb_j_w = rb_j.fixed_rows::<ANG_DIM>(DIM);
-
             let ndofs = link.joint.ndofs();
+            let jw = |j: &Jacobian<Real>, c: usize| -> SVector<Real, ANG_DIM> {
+                j.fixed_view::<ANG_DIM, 1>(DIM, c).into_owned()
+            };
 
             if i != 0 {
                 let parent_id = link.parent_internal_id;
                 let parent_link = &self.links[parent_id];
                 let parent_rb = &bodies[parent_link.rigid_body];
                 let parent_j = &self.body_jacobians[parent_id];
-                let parent_j_w = parent_j.fixed_rows::<ANG_DIM>(DIM);
                 let parent_w = SimdAngVector::<Real>::from(parent_rb.vels.angvel).gcross_matrix();
 
                 let (coriolis_v, parent_coriolis_v) = self.coriolis_v.index_mut2(i, parent_id);
                 let (coriolis_w, parent_coriolis_w) = self.coriolis_w.index_mut2(i, parent_id);
 
-                // The parent's blocks are zero outside its ranges, so are its children's
-                // contributions there; at this link's own dofs they start from zero.
-                let parent_ranges = self.dof_ranges.of(parent_id);
-                for &(first, len) in parent_ranges {
-                    coriolis_v
-                        .columns_mut(first, len)
-                        .copy_from(&parent_coriolis_v.columns(first, len));
-                    coriolis_w
-                        .columns_mut(first, len)
-                        .copy_from(&parent_coriolis_w.columns(first, len));
-                }
-                coriolis_v.columns_mut(link.assembly_id, ndofs).fill(0.0);
-                coriolis_w.columns_mut(link.assembly_id, ndofs).fill(0.0);
-
+                // [c1 - c0].gcross() * (JDot + JDot/u * qdot)
                 let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
-                let dvel_cross = vect_to_na(
+                // JDot (the 2.0 originates from the sum of two identical terms in JDot and
+                // JDot/u * qdot), then JDot/u * qdot: all three act on the parent's Jw.
+                let parent_jw_coeff = vect_to_na(
                     rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
                 )
-                .gcross_matrix_tr();
-                let joint_linvel_cross =
-                    vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr();
-                let parent_w_shift_cross = parent_w * shift_cross_tr;
+                .gcross_matrix_tr()
+                    + vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr()
+                    + parent_w * shift_cross_tr;
                 #[cfg(feature = "dim3")]
                 let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
 
-                for &(first, len) in parent_ranges {
-                    let mut coriolis_v = coriolis_v.columns_mut(first, len);
-                    let parent_j_w = parent_j_w.columns(first, len);
-
-                    // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
-                    coriolis_v.gemm(
-                        1.0,
-                        &shift_cross_tr,
-                        &parent_coriolis_w.columns(first, len),
-                        1.0,
-                    );
-                    // JDot
-                    coriolis_v.gemm(1.0, &dvel_cross, &parent_j_w, 1.0);
-                    // JDot/u * qdot
-                    coriolis_v.gemm(1.0, &joint_linvel_cross, &parent_j_w, 1.0);
-                    coriolis_v.gemm(1.0, &parent_w_shift_cross, &parent_j_w, 1.0);
-
-                    #[cfg(feature = "dim3")]
-                    coriolis_w
-                        .columns_mut(first, len)
-                        .gemm(-1.0, &vel_wrt_joint_w, &parent_j_w, 1.0);
+                // The parent's blocks are zero outside its ranges, so are this link's there.
+                for &(first, len) in self.dof_ranges.of(parent_id) {
+                    for c in first..first + len {
+                        let parent_cw = parent_coriolis_w.column(c).into_owned();
+                        let parent_jw = jw(parent_j, c);
+                        let cv = parent_coriolis_v.column(c)
+                            + shift_cross_tr * parent_cw
+                            + parent_jw_coeff * parent_jw;
+                        coriolis_v.set_column(c, &cv);
+                        #[cfg(feature = "dim3")]
+                        coriolis_w.set_column(c, &(parent_cw - vel_wrt_joint_w * parent_jw));
+                        #[cfg(feature = "dim2")]
+                        coriolis_w.set_column(c, &parent_cw);
+                    }
                 }
 
-                // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
+                // At this link's own dofs the parent's blocks are zero.
+                coriolis_v.columns_mut(link.assembly_id, ndofs).fill(0.0);
+                coriolis_w.columns_mut(link.assembly_id, ndofs).fill(0.0);
                 if !link.joint.kinematic {
-                    let mut coriolis_v_part = coriolis_v.columns_mut(link.assembly_id, ndofs);
-
                     let mut tmp1 = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
                     let mut rb_joint_j = tmp1.columns_mut(0, ndofs);
                     link.joint.jacobian(
@@ -1080,15 +1062,14 @@ impl Multibody {
                             * link.joint.data.local_frame1.rotation),
                         &mut rb_joint_j,
                     );
-
-                    let rb_joint_j_v = rb_joint_j.fixed_rows::<DIM>(0);
-                    coriolis_v_part.gemm(2.0, &parent_w, &rb_joint_j_v, 1.0);
-
-                    #[cfg(feature = "dim3")]
-                    {
-                        let rb_joint_j_w = rb_joint_j.fixed_rows::<ANG_DIM>(DIM);
-                        let mut coriolis_w_part = coriolis_w.columns_mut(link.assembly_id, ndofs);
-                        coriolis_w_part.gemm(1.0, &parent_w, &rb_joint_j_w, 1.0);
+                    for k in 0..ndofs {
+                        let joint_jv = rb_joint_j.fixed_view::<DIM, 1>(0, k).into_owned();
+                        coriolis_v.set_column(link.assembly_id + k, &(parent_w * joint_jv * 2.0));
+                        #[cfg(feature = "dim3")]
+                        {
+                            let joint_jw = rb_joint_j.fixed_view::<ANG_DIM, 1>(DIM, k).into_owned();
+                            coriolis_w.set_column(link.assembly_id + k, &(parent_w * joint_jw));
+                        }
                     }
                 }
             } else {
@@ -1097,73 +1078,57 @@ impl Multibody {
             }
 
             let coriolis_v = &mut self.coriolis_v[i];
-            let coriolis_w = &mut self.coriolis_w[i];
+            let coriolis_w = &self.coriolis_w[i];
             let ranges = self.dof_ranges.of(i);
 
-            {
-                // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
-                let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
-                // JDot
-                let dvel_cross = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr();
-                // JDot/u * qdot
-                let w_shift_cross =
-                    SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr;
-
-                for &(first, len) in ranges {
-                    let mut coriolis_v = coriolis_v.columns_mut(first, len);
-                    let rb_j_w = rb_j_w.columns(first, len);
-                    coriolis_v.gemm(1.0, &shift_cross_tr, &coriolis_w.columns(first, len), 1.0);
-                    coriolis_v.gemm(1.0, &dvel_cross, &rb_j_w, 1.0);
-                    coriolis_v.gemm(1.0, &w_shift_cross, &rb_j_w, 1.0);
-                }
-            }
-
-            let coriolis_v = &self.coriolis_v[i];
-            let coriolis_w = &self.coriolis_w[i];
-
-            /*
-             * Meld with the mass matrix (`i_coriolis_dt` is only read within `ranges`).
-             */
+            // [c3 - c2].gcross() * (JDot + JDot/u * qdot), then the meld with the mass matrix:
+            // i_coriolis_dt = [m·dt ∘ coriolis_v; dt·(I·coriolis_w + gyroscopic·Jw)] (read only
+            // within `ranges`).
+            let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
+            let rb_jw_coeff = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr()
+                + SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr;
             let rb_mass_dt = vect_to_na(rb_mass * dt);
+            #[cfg(feature = "dim3")]
+            let (inertia_dt, gyroscopic_dt) = (
+                mat_to_na(rb_inertia) * dt,
+                mat_to_na(gyroscopic_matrix) * dt,
+            );
             for &(first, len) in ranges {
-                let mut i_coriolis_dt_v = self.i_coriolis_dt.fixed_rows_mut::<DIM>(0);
-                let mut i_coriolis_dt_v = i_coriolis_dt_v.columns_mut(first, len);
-                i_coriolis_dt_v.copy_from(&coriolis_v.columns(first, len));
-                i_coriolis_dt_v
-                    .column_iter_mut()
-                    .for_each(|mut c| c.component_mul_assign(&rb_mass_dt));
+                for c in first..first + len {
+                    let cw = coriolis_w.column(c).into_owned();
+                    let rb_jw = jw(rb_j, c);
+                    let cv = coriolis_v.column(c) + shift_cross_tr * cw + rb_jw_coeff * rb_jw;
+                    coriolis_v.set_column(c, &cv);
 
-                let mut i_coriolis_dt_w = self.i_coriolis_dt.fixed_rows_mut::<ANG_DIM>(DIM);
-                let mut i_coriolis_dt_w = i_coriolis_dt_w.columns_mut(first, len);
-                #[cfg(feature = "dim2")]
-                {
-                    // NOTE: this is just an axpy, but on row columns.
-                    i_coriolis_dt_w.zip_apply(&coriolis_w.columns(first, len), |o, x| {
-                        *o = x * dt * rb_inertia
-                    });
-                }
-                #[cfg(feature = "dim3")]
-                {
-                    i_coriolis_dt_w.gemm(
-                        dt,
-                        &mat_to_na(rb_inertia),
-                        &coriolis_w.columns(first, len),
-                        0.0,
-                    );
+                    let mut i_coriolis_dt = self.i_coriolis_dt.column_mut(c);
+                    i_coriolis_dt
+                        .fixed_rows_mut::<DIM>(0)
+                        .copy_from(&cv.component_mul(&rb_mass_dt));
+                    #[cfg(feature = "dim3")]
+                    i_coriolis_dt
+                        .fixed_rows_mut::<ANG_DIM>(DIM)
+                        .copy_from(&(inertia_dt * cw + gyroscopic_dt * rb_jw));
+                    #[cfg(feature = "dim2")]
+                    i_coriolis_dt
+                        .fixed_rows_mut::<ANG_DIM>(DIM)
+                        .copy_from(&(cw * dt * rb_inertia));
                 }
             }
 
-            // acc_augmented_mass += rb_jᵀ · i_coriolis_dt, entry by entry as `gemm_tr` does.
-            for &(col_first, col_len) in ranges {
-                for col in col_first..col_first + col_len {
-                    let i_coriolis_dt_col = self.i_coriolis_dt.column(col);
-                    for &(first, len) in ranges {
-                        self.acc_augmented_mass
-                            .column_mut(col)
-                            .rows_mut(first, len)
-                            .gemv_tr(1.0, &rb_j.columns(first, len), &i_coriolis_dt_col, 1.0);
-                    }
-                }
+            // acc_augmented_mass += rb_jᵀ · i_coriolis_dt
+            tr_mul_add_over(
+                &mut self.acc_augmented_mass,
+                rb_j,
+                &self.i_coriolis_dt,
+                ranges,
+            );
+        }
+
+        // The plain mass matrix is symmetric: mirror its upper triangle.
+        let n = self.ndofs;
+        for c in 0..n {
+            for r in 0..c {
+                self.augmented_mass[(c, r)] = self.augmented_mass[(r, c)];
             }
         }
 
@@ -1177,7 +1142,6 @@ impl Multibody {
          */
         for i in 0..self.ndofs {
             let diag = self.damping[i] * dt + self.armature[i];
-            self.acc_augmented_mass[(i, i)] += diag;
             self.augmented_mass[(i, i)] += diag;
         }
 
@@ -1192,14 +1156,15 @@ impl Multibody {
                 if (locked >> a) & 1 == 0 {
                     let k = self.links[li].joint.spring_stiffness[a];
                     if k != 0.0 {
-                        let d = k * dt2;
-                        self.acc_augmented_mass[(idx, idx)] += d;
-                        self.augmented_mass[(idx, idx)] += d;
+                        self.augmented_mass[(idx, idx)] += k * dt2;
                     }
                     idx += 1;
                 }
             }
         }
+
+        // The accelerations' matrix: the plain one plus the Coriolis and gyroscopic terms.
+        self.acc_augmented_mass += &self.augmented_mass;
 
         let effective_dim = self
             .augmented_mass_indices
@@ -1218,16 +1183,26 @@ impl Multibody {
             .rearrange_rows(&mut self.augmented_mass, true);
 
         // TODO: avoid allocation inside LU at each timestep.
-        self.acc_inv_augmented_mass = LU::new(
+        // (A plain clone when nothing is removed: `view().into_owned()` copies element by
+        // element through an iterator, which cost as much as the factorization.)
+        let acc = if effective_dim == self.ndofs {
+            self.acc_augmented_mass.clone()
+        } else {
             self.acc_augmented_mass
                 .view((0, 0), (effective_dim, effective_dim))
-                .into_owned(),
-        );
-        self.inv_augmented_mass = LU::new(
-            self.augmented_mass
-                .view((0, 0), (effective_dim, effective_dim))
-                .into_owned(),
-        );
+                .into_owned()
+        };
+        self.acc_inv_augmented_mass = LU::new(acc);
+        // The plain mass matrix is tree-sparse when no kinematic dof reorders it.
+        let plain = self
+            .augmented_mass
+            .view((0, 0), (effective_dim, effective_dim));
+        if effective_dim == self.ndofs {
+            self.inv_augmented_mass
+                .factor_tree(plain, self.dof_ranges.dof_parents());
+        } else {
+            self.inv_augmented_mass.factor_dense(plain);
+        }
     }
 
     /// Per-DoF inverse joint-space inertia `diag(M⁻¹)` at the current configuration, where `M`

@@ -7,6 +7,7 @@
 //! and Coriolis products over these ranges only, with the same operations per entry.
 
 use super::multibody_link::MultibodyLinkVec;
+use super::multibody_mass_factor::NO_PARENT;
 use crate::alloc_prelude::*;
 
 /// Per link, its own and its ancestors' degrees of freedom as sorted, merged ranges
@@ -20,6 +21,9 @@ pub(crate) struct LinkDofRanges {
     ranges: Vec<(usize, usize)>,
     /// Link `i`'s ranges are `ranges[offsets[i]..offsets[i + 1]]`.
     offsets: Vec<usize>,
+    /// Per dof, its parent in the dof tree: the previous dof of its joint, else the last dof
+    /// of its nearest ancestor link with any (`NO_PARENT` for the first dof of the tree).
+    dof_parents: Vec<usize>,
     /// Bumped each time the ranges change: buffers that rely on being zero outside them
     /// record the version they were cleared for.
     version: u64,
@@ -30,9 +34,18 @@ impl LinkDofRanges {
     /// Allocates nothing when they did not.
     pub fn update(&mut self, links: &MultibodyLinkVec) {
         let unchanged = self.topology.len() == links.len()
-            && links.iter().zip(&self.topology).enumerate().all(|(i, (link, seen))| {
-                *seen == (Self::parent_of(i, link.parent_internal_id), link.assembly_id, link.joint.ndofs())
-            });
+            && links
+                .iter()
+                .zip(&self.topology)
+                .enumerate()
+                .all(|(i, (link, seen))| {
+                    *seen
+                        == (
+                            Self::parent_of(i, link.parent_internal_id),
+                            link.assembly_id,
+                            link.joint.ndofs(),
+                        )
+                });
         if unchanged && self.version != 0 {
             return;
         }
@@ -41,9 +54,11 @@ impl LinkDofRanges {
         self.ranges.clear();
         self.offsets.clear();
         self.offsets.push(0);
+        self.dof_parents.clear();
         for (i, link) in links.iter().enumerate() {
             let parent = Self::parent_of(i, link.parent_internal_id);
-            self.topology.push((parent, link.assembly_id, link.joint.ndofs()));
+            self.topology
+                .push((parent, link.assembly_id, link.joint.ndofs()));
             if parent != usize::MAX {
                 for k in self.offsets[parent]..self.offsets[parent + 1] {
                     let range = self.ranges[k];
@@ -51,6 +66,14 @@ impl LinkDofRanges {
                 }
             }
             let own = (link.assembly_id, link.joint.ndofs());
+            let parent_dof = match self.ranges[self.offsets[i]..].last() {
+                Some(last) => last.0 + last.1 - 1,
+                None => NO_PARENT,
+            };
+            for k in 0..own.1 {
+                self.dof_parents
+                    .push(if k == 0 { parent_dof } else { own.0 + k - 1 });
+            }
             if own.1 > 0 {
                 let has_ranges = self.ranges.len() > self.offsets[i];
                 match self.ranges.last_mut() {
@@ -64,12 +87,21 @@ impl LinkDofRanges {
     }
 
     fn parent_of(link: usize, parent_internal_id: usize) -> usize {
-        if link == 0 { usize::MAX } else { parent_internal_id }
+        if link == 0 {
+            usize::MAX
+        } else {
+            parent_internal_id
+        }
     }
 
     /// The ranges `(first, len)` of link `link`'s own and ancestors' degrees of freedom.
     pub fn of(&self, link: usize) -> &[(usize, usize)] {
         &self.ranges[self.offsets[link]..self.offsets[link + 1]]
+    }
+
+    /// Per dof, its parent dof in the tree (`NO_PARENT` for the first).
+    pub fn dof_parents(&self) -> &[usize] {
+        &self.dof_parents
     }
 
     /// Changes whenever the ranges do (never 0 once built).
