@@ -25,7 +25,6 @@ the ratio quadcl / MuJoCo (issue 33's target: at least 1.0 at 0.01 s x 2).
 
 import argparse
 import json
-import pathlib
 import statistics
 import subprocess
 import time
@@ -33,30 +32,16 @@ import time
 import mujoco
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-DEFAULT_Q = np.array([0.1, 0.8, -1.5, -0.1, 0.8, -1.5, 0.1, 1.0, -1.5, -0.1, 1.0, -1.5])  # FL FR RL RR
-KP, KD, ACTION_SCALE, TORQUE = 20.0, 0.5, 0.25, 33.5
+from mujoco_a1 import DEFAULT_Q, ROOT, a1_model as _a1_model
+
+ACTION_SCALE = 0.25
 ACTION_ROWS = 256
 
 
 def a1_model(dt):
-    spec = mujoco.MjSpec.from_file(str(ROOT / "scenes" / "a1.urdf"))
-    spec.option.timestep = dt
-    # Euler (the default) blows up at 0.01 s with these gains (NaN in qacc within 2 s of the trot);
-    # implicitfast is what MuJoCo's own legged models (Menagerie, mjlab) run, and holds at both steps.
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    trunk = spec.body("trunk")
-    trunk.add_freejoint()
-    trunk.pos = [0, 0, 0.42]
-    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1], friction=[1.0, 0.005, 0.0001])
-    joints = [j.name for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
-    assert len(joints) == 12, joints
-    for name in joints:
-        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        act.set_to_position(kp=KP, kv=KD)
-        act.forcerange = [-TORQUE, TORQUE]
-        act.forcelimited = True
-    return spec.compile()
+    # Euler (MuJoCo's default) blows up at 0.01 s with these gains (NaN in qacc within 2 s of the
+    # trot); implicitfast is what MuJoCo's own legged models (Menagerie, mjlab) run, and holds at both.
+    return _a1_model(dt, mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
 
 
 def gait_actions(policy_dt):

@@ -28,7 +28,6 @@ and the split per iteration (physics, inference, update, other), in ms.
 import argparse
 import json
 import math
-import pathlib
 import time
 
 import mujoco
@@ -36,27 +35,14 @@ import numpy as np
 import torch
 from mujoco import rollout
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-DEFAULT_Q = np.array([0.1, 0.8, -1.5, -0.1, 0.8, -1.5, 0.1, 1.0, -1.5, -0.1, 1.0, -1.5])  # FL FR RL RR
-KP, KD, ACTION_SCALE, DT, DECIMATION = 20.0, 0.5, 0.25, 0.005, 4
+from mujoco_a1 import DEFAULT_Q, KD, KP, a1_model as _a1_model
+
+ACTION_SCALE, DT, DECIMATION = 0.25, 0.005, 4
 EPISODE_STEPS = int(20.0 / (DT * DECIMATION))
 
 
 def a1_model():
-    spec = mujoco.MjSpec.from_file(str(ROOT / "scenes" / "a1.urdf"))
-    spec.option.timestep = DT
-    trunk = spec.body("trunk")
-    trunk.add_freejoint()
-    trunk.pos = [0, 0, 0.42]
-    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1], friction=[1.0, 0.005, 0.0001])
-    joints = [j.name for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
-    assert len(joints) == 12, joints
-    for name in joints:
-        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        act.set_to_position(kp=KP, kv=KD)
-        act.forcerange = [-33.5, 33.5]
-        act.forcelimited = True
-    return spec.compile()
+    return _a1_model(DT)
 
 
 def quat_rotate_inverse(q, v):
