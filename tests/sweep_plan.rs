@@ -89,3 +89,25 @@ fn a_bad_key_or_a_refused_value_names_the_sweep_file_and_the_key_and_writes_noth
         assert!(!out.exists(), "{axes}: nothing is written before every cell is checked");
     }
 }
+
+#[test]
+fn a_base_policy_found_neither_from_here_nor_beside_the_base_is_refused_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = sweep_file(tmp.path(), "seed = [1]\n");
+    let base = tmp.path().join("smoke.toml");
+    let text = std::fs::read_to_string(&base).unwrap();
+    std::fs::write(&base, format!("{text}\n[run]\nbase_policy = \"policies/no-such-base\"\n")).unwrap();
+    let out = tmp.path().join("never");
+    let err = format!("{:#}", plan(&file, &out).unwrap_err());
+    for needle in [file.display().to_string(), "base_policy".into(), "policies/no-such-base".into()] {
+        assert!(err.contains(&needle), "expected {needle:?} in {err}");
+    }
+    assert!(!out.exists(), "nothing is written");
+
+    // Beside the base it is found, and the cell names it by its absolute path.
+    std::fs::create_dir_all(tmp.path().join("policies/no-such-base")).unwrap();
+    let p = plan(&file, &out).unwrap();
+    let cell = std::fs::read_to_string(out.join("cells").join("0.toml")).unwrap();
+    assert!(cell.contains(&tmp.path().join("policies/no-such-base").display().to_string()), "{cell}");
+    assert_eq!(p.cells.len(), 1);
+}

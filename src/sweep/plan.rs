@@ -152,7 +152,8 @@ fn prepare(file: &Path) -> anyhow::Result<(Plan, Vec<PlannedCell>)> {
         .with_context(|| format!("sweep file {shown}: the base run file {} is not valid", sweep.base.display()))?;
     let base: toml::Value = toml::from_str(&base_text)
         .map_err(|e| anyhow::anyhow!("sweep file {shown}: base {}: {e}", sweep.base.display()))?;
-    let base = with_absolute_run_paths(base, &sweep.base);
+    let base = with_absolute_run_paths(base, &sweep.base)
+        .with_context(|| format!("sweep file {shown}: base {}", sweep.base.display()))?;
     // Each value alone first: the error then names the one key that is wrong.
     for axis in &sweep.axes {
         for value in &axis.values {
@@ -291,18 +292,28 @@ fn json_of(value: &toml::Value) -> serde_json::Value {
 
 /// The base run file's `[run] reference` and `base_policy` as absolute paths, found the way
 /// a run file finds them (as given, else beside the file): a cell's run file lives elsewhere.
-fn with_absolute_run_paths(mut base: toml::Value, base_path: &Path) -> toml::Value {
+/// A path found neither way is an error here, not a cell that fails later.
+fn with_absolute_run_paths(mut base: toml::Value, base_path: &Path) -> anyhow::Result<toml::Value> {
     let folder = base_path.parent().unwrap_or(Path::new("."));
     if let Some(run) = base.get_mut("run").and_then(|r| r.as_table_mut()) {
         for key in ["reference", "base_policy"] {
             if let Some(toml::Value::String(p)) = run.get_mut(key) {
                 let given = PathBuf::from(&*p);
                 let found = if given.is_relative() && !given.exists() { folder.join(&given) } else { given };
+                if !found.exists() {
+                    let here = std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default();
+                    anyhow::bail!(
+                        "[run] {key} = {p:?} exists neither from the current folder ({here}) nor beside the run \
+                         file ({}): plan from the folder its paths are relative to (the repository root for the \
+                         shipped files)",
+                        folder.display()
+                    );
+                }
                 if let Ok(absolute) = std::path::absolute(&found) {
                     *p = absolute.display().to_string();
                 }
             }
         }
     }
-    base
+    Ok(base)
 }
