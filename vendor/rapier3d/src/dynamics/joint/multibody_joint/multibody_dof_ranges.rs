@@ -4,7 +4,8 @@
 //! A link's body Jacobian (6 x ndofs) has non-zero columns only at its own degrees of freedom
 //! and those of its ancestors: a leg link of a floating quadruped touches 6 + 3 of 18 columns.
 //! Products over the other columns add exact zeros, so `Multibody` runs its Jacobian, mass-matrix
-//! and Coriolis products over these ranges only, with the same operations per entry.
+//! and Coriolis products over these ranges only. The dofs' parents give the tree that the mass
+//! matrix is factorized along (`MultibodyMassFactor`).
 
 use super::multibody_link::MultibodyLinkVec;
 use super::multibody_mass_factor::NO_PARENT;
