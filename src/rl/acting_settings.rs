@@ -10,11 +10,12 @@
 use crate::config::Config;
 
 /// The keys (TOML paths) of every setting a trained policy depends on to act.
-pub const ACTING_SETTINGS: [&str; 19] = [
+pub const ACTING_SETTINGS: [&str; 20] = [
     "env.urdf",
     "env.physics_dt",
     "env.decimation",
     "env.solver_iterations",
+    "env.coriolis",
     "env.kp",
     "env.kd",
     "env.action_scale",

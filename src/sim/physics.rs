@@ -13,7 +13,7 @@
 
 use super::robot::{Leg, RobotModel, NUM_LEGS};
 use super::terrain;
-use crate::config::EnvConfig;
+use crate::config::{CoriolisForces, EnvConfig};
 use rapier3d::math::{Pose, Vector};
 use rapier3d::prelude::*;
 use rapier3d_urdf::{UrdfLoaderOptions, UrdfMultibodyOptions, UrdfRobot};
@@ -160,6 +160,11 @@ impl RobotSim {
             joint_links[i] = link.id;
         }
         let multibody = multibody.expect("12 leg joints");
+        world
+            .multibody_joints
+            .get_multibody_mut(multibody)
+            .expect("robot multibody exists")
+            .set_implicit_coriolis(cfg.coriolis == CoriolisForces::Implicit);
         let calf_links = [joint_links[2], joint_links[5], joint_links[8], joint_links[11]];
 
         // Classify colliders by the URDF link they belong to.

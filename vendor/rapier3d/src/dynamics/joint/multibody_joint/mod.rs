@@ -40,4 +40,6 @@ mod multibody_joint;
 mod unit_multibody_joint;
 
 #[cfg(all(test, feature = "alloc"))]
+mod multibody_explicit_coriolis_tests;
+#[cfg(all(test, feature = "alloc"))]
 mod multibody_regression_tests;

@@ -101,6 +101,11 @@ fn copy_resized(dst: &mut DVector, src: &DVector) {
     }
 }
 
+#[cfg(feature = "serde-serialize")]
+fn implicit_coriolis_default() -> bool {
+    true
+}
+
 /// Sets `dst` to `len` zeros, reallocating only when its length differs.
 fn resize_zeroed(dst: &mut DVector, len: usize) {
     if dst.len() == len {
@@ -194,6 +199,13 @@ pub struct Multibody {
     pub(crate) root_is_dynamic: bool,
     pub(crate) solver_id: u32,
     self_contacts_enabled: bool,
+    /// Whether the velocity-product forces (Coriolis, centrifugal, gyroscopic) are semi-implicit
+    /// (see [`Multibody::set_implicit_coriolis`]).
+    #[cfg_attr(
+        feature = "serde-serialize",
+        serde(default = "implicit_coriolis_default")
+    )]
+    implicit_coriolis: bool,
     /// Holonomic couplings between two of this multibody's generalized
     /// coordinates (`q2 = coeff·q1 + offset`), e.g. MuJoCo's
     /// `<equality><joint>`. Resolved as velocity constraints each step.
@@ -250,6 +262,7 @@ impl Multibody {
             coriolis_ranges: 0,
             root_is_dynamic: false,
             self_contacts_enabled,
+            implicit_coriolis: true,
             couplings: Vec::new(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
@@ -282,7 +295,9 @@ impl Multibody {
                 continue;
             } else if is_new_root {
                 link2mb[i] = result.len();
-                result.push(Multibody::with_self_contacts(self.self_contacts_enabled));
+                let mut mb = Multibody::with_self_contacts(self.self_contacts_enabled);
+                mb.implicit_coriolis = self.implicit_coriolis;
+                result.push(mb);
             } else {
                 link2mb[i] = link2mb[link.parent_internal_id]
             }
@@ -441,6 +456,28 @@ impl Multibody {
     /// if the contact is enabled on the individual joint with [`GenericJoint::contacts_enabled`].
     pub fn set_self_contacts_enabled(&mut self, enabled: bool) {
         self.self_contacts_enabled = enabled;
+    }
+
+    /// Whether the velocity-product forces are semi-implicit (the default).
+    pub fn implicit_coriolis(&self) -> bool {
+        self.implicit_coriolis
+    }
+
+    /// Chooses how the velocity-product forces (Coriolis, centrifugal and gyroscopic) enter a
+    /// step.
+    ///
+    /// - `true` (the default): semi-implicit. Their derivative with respect to the generalized
+    ///   velocities, times `dt`, is added to the mass matrix the free accelerations are solved
+    ///   against. That matrix is not symmetric: it is assembled from a Coriolis block per link
+    ///   and factorized by a dense LU at every step, and an energy guard falls back to the plain
+    ///   mass matrix where the semi-implicit solve injects energy.
+    /// - `false`: explicit, as MuJoCo's `implicitfast` integrator treats them. The forces are
+    ///   still computed at every step, but the free accelerations are solved against the plain
+    ///   mass matrix (with damping, armature and springs), whose tree-sparse factorization the
+    ///   constraints use anyway: no Coriolis blocks, no second factorization, no guard. Cheaper
+    ///   per step; less damping of fast spins at large time steps.
+    pub fn set_implicit_coriolis(&mut self, implicit: bool) {
+        self.implicit_coriolis = implicit;
     }
 
     /// The factorized augmented mass matrix of this multibody (solve against it with
@@ -618,7 +655,8 @@ impl Multibody {
         // occasionally cause instabilities due to the matrix being near singular.
         // To prevent that, we enable a check that verifies the result and fallbacks
         // to the explicit term if needed
-        let check_implicit_coriolis_divergence = dt * self.velocities.amax() >= 1.0e-3;
+        let check_implicit_coriolis_divergence =
+            self.implicit_coriolis && dt * self.velocities.amax() >= 1.0e-3;
         // Generalized forces that derive from positions or external inputs
         // (gravity, user forces, spring position terms).
         // (Kept in the workspace: no allocation per step.)
@@ -729,9 +767,14 @@ impl Multibody {
             copy_resized(&mut gen_forces, &self.accelerations);
         }
 
+        // Semi-implicit velocity-product forces: their own matrix; explicit: the plain one.
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut self.accelerations, |accs| {
-                self.acc_inv_augmented_mass.solve_mut(accs);
+                if self.implicit_coriolis {
+                    self.acc_inv_augmented_mass.solve_mut(accs);
+                } else {
+                    self.inv_augmented_mass.solve_mut(accs);
+                }
             });
 
         if check_implicit_coriolis_divergence {
@@ -935,7 +978,9 @@ impl Multibody {
             self.acc_augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
         } else {
             self.augmented_mass.fill(0.0);
-            self.acc_augmented_mass.fill(0.0);
+            if self.implicit_coriolis {
+                self.acc_augmented_mass.fill(0.0);
+            }
         }
 
         self.augmented_mass_indices.clear();
@@ -986,8 +1031,10 @@ impl Multibody {
             // Derivative of gyroscopic forces: only the accelerations' matrix has it, added
             // below with the Coriolis terms (`acc = plain + Jᵀ·(coriolis + gyroscopic)·dt`).
             #[cfg(feature = "dim3")]
-            let gyroscopic_matrix = rb.vels.angvel.gcross_matrix() * rb_inertia
-                - (rb_inertia * rb.vels.angvel).gcross_matrix();
+            let gyroscopic_matrix = || {
+                rb.vels.angvel.gcross_matrix() * rb_inertia
+                    - (rb_inertia * rb.vels.angvel).gcross_matrix()
+            };
 
             // The plain mass matrix, once, upper triangle only (mirrored after the loop).
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
@@ -999,6 +1046,11 @@ impl Multibody {
                 body_jacobian,
                 ranges,
             );
+
+            // With explicit velocity-product forces the accelerations' matrix is the plain one.
+            if !self.implicit_coriolis {
+                continue;
+            }
 
             /*
              *
@@ -1091,7 +1143,7 @@ impl Multibody {
             #[cfg(feature = "dim3")]
             let (inertia_dt, gyroscopic_dt) = (
                 mat_to_na(rb_inertia) * dt,
-                mat_to_na(gyroscopic_matrix) * dt,
+                mat_to_na(gyroscopic_matrix()) * dt,
             );
             for &(first, len) in ranges {
                 for c in first..first + len {
@@ -1164,35 +1216,39 @@ impl Multibody {
         }
 
         // The accelerations' matrix: the plain one plus the Coriolis and gyroscopic terms.
-        self.acc_augmented_mass += &self.augmented_mass;
+        if self.implicit_coriolis {
+            self.acc_augmented_mass += &self.augmented_mass;
+        }
 
         let effective_dim = self
             .augmented_mass_indices
-            .dim_after_removal(self.acc_augmented_mass.nrows());
+            .dim_after_removal(self.augmented_mass.nrows());
 
         // PERF: since we clone the matrix anyway for LU, should be directly output
         //       a new matrix instead of applying permutations?
         self.augmented_mass_indices
-            .rearrange_columns(&mut self.acc_augmented_mass, true);
-        self.augmented_mass_indices
             .rearrange_columns(&mut self.augmented_mass, true);
-
-        self.augmented_mass_indices
-            .rearrange_rows(&mut self.acc_augmented_mass, true);
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
-        // TODO: avoid allocation inside LU at each timestep.
-        // (A plain clone when nothing is removed: `view().into_owned()` copies element by
-        // element through an iterator, which cost as much as the factorization.)
-        let acc = if effective_dim == self.ndofs {
-            self.acc_augmented_mass.clone()
-        } else {
-            self.acc_augmented_mass
-                .view((0, 0), (effective_dim, effective_dim))
-                .into_owned()
-        };
-        self.acc_inv_augmented_mass = LU::new(acc);
+        if self.implicit_coriolis {
+            self.augmented_mass_indices
+                .rearrange_columns(&mut self.acc_augmented_mass, true);
+            self.augmented_mass_indices
+                .rearrange_rows(&mut self.acc_augmented_mass, true);
+
+            // TODO: avoid allocation inside LU at each timestep.
+            // (A plain clone when nothing is removed: `view().into_owned()` copies element by
+            // element through an iterator, which cost as much as the factorization.)
+            let acc = if effective_dim == self.ndofs {
+                self.acc_augmented_mass.clone()
+            } else {
+                self.acc_augmented_mass
+                    .view((0, 0), (effective_dim, effective_dim))
+                    .into_owned()
+            };
+            self.acc_inv_augmented_mass = LU::new(acc);
+        }
         // The plain mass matrix is tree-sparse when no kinematic dof reorders it.
         let plain = self
             .augmented_mass
