@@ -352,3 +352,57 @@ fn piggybacks_settings_in_metrics_json_are_the_ones_its_networks_trained_with() 
         assert_eq!(mask["piggyback_threshold"].as_f64(), Some(4e-3), "{}", net["name"]);
     }
 }
+
+#[test]
+fn every_methods_key_setting_in_metrics_json_is_the_one_it_trained_with() {
+    // (method, the run file's table, its key, two values): each value is written into
+    // metrics.json as given, and the two values train differently, so the written value
+    // is the one the update used (a setting recorded but not applied trains alike).
+    let cases: [(&str, &str, &str, f64, f64); 7] = [
+        ("ewc", "[method.ewc]", "lambda", 100.0, 3000.0),
+        ("si", "[method.si]", "c", 0.3, 30.0),
+        ("rwalk", "[method.rwalk]", "lambda", 0.1, 10.0),
+        ("er", "[method.er]", "beta", 0.01, 10.0),
+        ("agem", "[method.agem]", "buffer_size", 8.0, 64.0),
+        ("packnet", "[method.packnet]", "keep", 0.25, 0.75),
+        ("wsn", "[method]", "capacity", 0.2, 0.6),
+    ];
+    let tasks = "[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n";
+    let tmp = tempfile::tempdir().unwrap();
+    for (method, table, key, a, b) in cases {
+        let run_with = |value: f64| {
+            let dir = tmp.path().join(format!("{method}-{value}"));
+            std::fs::create_dir_all(&dir).unwrap();
+            let cfg = dir.join("run.toml");
+            let value_text = if key == "buffer_size" { format!("{}", value as usize) } else { format!("{value:?}") };
+            let own_table = if table == "[method]" { String::new() } else { format!("{table}\n") };
+            let text = format!(
+                "seed = 2\niterations = 60\n[run]\nlearner = \"toy\"\n[method]\nname = \"{method}\"\n\
+                 {own_table}{key} = {value_text}\n{tasks}"
+            );
+            std::fs::write(&cfg, &text).unwrap();
+            let m = run(&cfg, &dir.join("out"), RunOptions::default()).unwrap();
+            assert_eq!(m.method, method, "{text}");
+            (assert_metrics_json_complete(&dir.join("out")), m.eval_matrix)
+        };
+        let ((json_a, matrix_a), (json_b, matrix_b)) = (run_with(a), run_with(b));
+        for (json, value) in [(&json_a, a), (&json_b, b)] {
+            let written = if table == "[method]" {
+                // WSN's capacity is a switch: each step records the switches it trained with.
+                let steps = json["steps"].as_array().unwrap();
+                assert_eq!(steps.len(), 2, "{method}");
+                for s in steps {
+                    assert_eq!(s["switches"][key].as_f64(), Some(value), "{method}: step {}", s["step"]);
+                }
+                steps[0]["switches"][key].as_f64()
+            } else {
+                json["method_settings"][key].as_f64()
+            };
+            assert_eq!(written, Some(value), "{method} {key}");
+        }
+        assert_ne!(
+            matrix_a, matrix_b,
+            "{method}: {key} {a} and {b} trained alike, so the setting never reached training"
+        );
+    }
+}
