@@ -22,6 +22,11 @@
 //! | [`sweep`] | grids of runs: a sweep file planned into cells, run here (child processes) or as a Slurm array job, status, collected with bootstrap intervals over seeds | `util`, `engine` |
 //! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread, the Sweep screen | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record`, `sweep` |
 //!
+//! Two Cargo features, both on by default, build the parts a library user may not
+//! want: `workbench` (the [`tui`] module, ratatui) and `rerun` (the Rerun recorders
+//! of [`record`]). The binary needs both; the Python package (`python/`) builds
+//! with neither.
+//!
 //! `engine` imports `sim` for what only a simulator-backed learner needs (the
 //! task perturbations it trains on, the shifted environments of sim-to-real
 //! fine-tuning). `sim` never imports `nn`; `nn` never imports `sim`.
@@ -46,5 +51,6 @@ pub mod record;
 pub mod rl;
 pub mod sim;
 pub mod sweep;
+#[cfg(feature = "workbench")]
 pub mod tui;
 pub mod util;

@@ -72,7 +72,7 @@ struct Report {
 pub fn run(args: RobotArgs) -> anyhow::Result<()> {
     bounds::check("--seconds", args.seconds, Interval::OpenClosed(0.0, 60.0))?;
     let mut env = match &args.config {
-        Some(path) => env_of(path)?,
+        Some(path) => quadcl::engine::env_of_file(path)?,
         None => EnvConfig::default(),
     };
     if let Some(urdf) = &args.urdf {
@@ -89,18 +89,6 @@ pub fn run(args: RobotArgs) -> anyhow::Result<()> {
         print_text(&report);
     }
     Ok(())
-}
-
-/// The `[env]` table of a run file (it has `[[task]]`) or of a training config.
-fn env_of(path: &std::path::Path) -> anyhow::Result<EnvConfig> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading config {}", path.display()))?;
-    let value: toml::Table = toml::from_str(&text).with_context(|| format!("in config {}", path.display()))?;
-    let env = if value.contains_key("task") {
-        quadcl::engine::RunConfig::from_toml_str(&text).map(|run| run.config.env)
-    } else {
-        quadcl::config::Config::from_toml_str(&text).map(|cfg| cfg.env)
-    };
-    env.with_context(|| format!("in config {}", path.display()))
 }
 
 fn report(env: &EnvConfig, robot: &RobotModel, stand: StandReport) -> anyhow::Result<Report> {

@@ -13,10 +13,12 @@
 //! | `run_dir` | a run's output folder: metrics.json, checkpoints, log, resume |
 //! | `runner` | a session bound to its run folder: set-up, restore, writes after each task (`quadcl run`, the workbench) |
 //! | `ppo_learner` | the PPO + CENet agent on the quadruped as a `Learner` |
+//! | `env_source` | a robot's `[env]` settings by name, URDF or config file (`quadcl robot --config`, the Python package) |
 //! | `shift` | a shifted environment (friction, mass, motor strength, latency) for sim-to-real fine-tuning |
 //! | `sim2real` | sim-to-real fine-tuning of one learned task (METHOD.md 2.7; `quadcl finetune`) |
 //! | `toy_learner` | a tiny masked regression learner for fast tests |
 
+mod env_source;
 mod events;
 mod learner;
 mod ppo_learner;
@@ -29,6 +31,7 @@ mod shift;
 mod sim2real;
 mod toy_learner;
 
+pub use env_source::{env_of_file, env_of_robot, SHIPPED_ROBOTS};
 pub use events::{ChannelObserver, Command, CommandSender, Event, EventLog, Observer};
 pub use learner::{Evaluation, Learner, TaskStart};
 pub use ppo_learner::{make_ppo_learner, max_episode_return, max_reward_rate, PpoTaskLearner};

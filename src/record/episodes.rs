@@ -6,7 +6,9 @@
 //! first; a live view runs at the speed of simulated time.
 
 use super::recorder::Recorder;
+#[cfg(feature = "rerun")]
 use super::rerun::RerunSink;
+#[cfg(feature = "rerun")]
 use super::rerun_scene::RerunScene;
 use crate::config::bounds::{self, Interval};
 use crate::config::env::check_command;
@@ -82,7 +84,10 @@ pub fn record_episodes(policy: &Path, task: &str, out: &Path, o: &RecordOptions)
     let viewer = RobotViewer::new(policy, task, o.seed, o.command)?;
     let recorder = match ext {
         "mcap" => Recorder::mcap(out, viewer.env().robot())?,
+        #[cfg(feature = "rerun")]
         "rrd" => Recorder::rerun(&[RerunSink::Save(out.to_path_buf())], viewer.env().robot(), &scene(&viewer, policy))?,
+        #[cfg(not(feature = "rerun"))]
+        "rrd" => anyhow::bail!("{}: this build of quadcl has no Rerun (its `rerun` feature is off)", out.display()),
         other => anyhow::bail!("{}: unknown recording format {other:?} (use .mcap or .rrd)", out.display()),
     };
     let mut summary =
@@ -91,6 +96,7 @@ pub fn record_episodes(policy: &Path, task: &str, out: &Path, o: &RecordOptions)
     Ok(summary)
 }
 
+#[cfg(feature = "rerun")]
 /// Streams `policy` on `task` to the Rerun `sinks` (a live viewer, a file, or both), pacing
 /// the steps at the speed of simulated time while a viewer watches.
 pub fn view_policy(policy: &Path, task: &str, sinks: &[RerunSink], o: &RecordOptions) -> anyhow::Result<RecordSummary> {
@@ -128,6 +134,7 @@ fn check_options(o: &RecordOptions) -> anyhow::Result<()> {
 }
 
 /// What a Rerun recording of `viewer` shows besides the motion.
+#[cfg(feature = "rerun")]
 fn scene(viewer: &RobotViewer, policy: &Path) -> RerunScene {
     RerunScene { task: viewer.task().to_string(), policy: policy.display().to_string(), masks: viewer.mask_views() }
 }

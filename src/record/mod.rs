@@ -10,6 +10,8 @@
 //! - `rerun`, `rerun_scene`: the robot in Rerun (live viewer over gRPC, `.rrd` files): the
 //!   URDF through Rerun's importer, a transform per joint per step, contacts, command and
 //!   velocity arrows, pushes, reward terms, tracking errors, torques, the task's masks.
+//! - The Rerun modules are built with the `rerun` feature (on by default; the Python
+//!   package leaves it off, and an `.rrd` is then an error naming the feature).
 //! - `episodes`: a policy's episodes on a task into a file (`quadcl record`) or a viewer
 //!   (`quadcl view`).
 
@@ -17,12 +19,18 @@ mod episodes;
 mod foxglove;
 mod mcap;
 mod recorder;
+#[cfg(feature = "rerun")]
 mod rerun;
+#[cfg(feature = "rerun")]
 mod rerun_scene;
 mod sample;
 
 pub use self::mcap::TOPICS;
+#[cfg(feature = "rerun")]
 pub use self::rerun::{RerunSink, CONNECT_WAIT, TIMELINE, VIEWER_INSTALL};
-pub use episodes::{record_episodes, view_policy, RecordFormat, RecordOptions, RecordSummary, MAX_SECONDS};
+#[cfg(feature = "rerun")]
+pub use episodes::view_policy;
+pub use episodes::{record_episodes, RecordFormat, RecordOptions, RecordSummary, MAX_SECONDS};
 pub use recorder::Recorder;
+#[cfg(feature = "rerun")]
 pub use rerun_scene::{RerunScene, ROBOT_ENTITY};

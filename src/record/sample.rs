@@ -16,9 +16,13 @@ pub(crate) struct Sample {
     pub qd: [f32; 12],
     pub torques: [f32; 12],
     /// Trunk velocity, world frame (m/s) and angular velocity, world frame (rad/s).
+    /// (The trunk's velocity and pose are drawn by the Rerun recorder only.)
+    #[cfg_attr(not(feature = "rerun"), allow(dead_code))]
     pub base_lin_vel: [f32; 3],
+    #[cfg_attr(not(feature = "rerun"), allow(dead_code))]
     pub base_ang_vel: [f32; 3],
     /// Trunk orientation (x, y, z, w).
+    #[cfg_attr(not(feature = "rerun"), allow(dead_code))]
     pub base_quat: [f32; 4],
     /// The velocity command (vx, vy, wz), trunk frame.
     pub command: [f32; 3],
@@ -50,6 +54,7 @@ impl Sample {
     }
 
     /// The trunk's velocity in its own frame: forward vx, lateral vy (m/s), yaw rate wz (rad/s).
+    #[cfg_attr(not(feature = "rerun"), allow(dead_code))]
     pub fn base_velocity(&self) -> [f32; 3] {
         let lin = crate::sim::obs::rotate_into_frame(self.base_quat, self.base_lin_vel);
         let ang = crate::sim::obs::rotate_into_frame(self.base_quat, self.base_ang_vel);
@@ -58,6 +63,7 @@ impl Sample {
 
     /// The tracking errors of the step: |command (vx, vy) - trunk (vx, vy)| (m/s) and
     /// |command wz - trunk wz| (rad/s).
+    #[cfg_attr(not(feature = "rerun"), allow(dead_code))]
     pub fn tracking_errors(&self) -> [f32; 2] {
         let [vx, vy, wz] = self.base_velocity();
         let [cx, cy, cw] = self.command;

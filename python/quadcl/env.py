@@ -1,0 +1,48 @@
+"""One quadcl environment as a ``gymnasium.Env`` (registered as
+``quadcl/Quadruped-v0``): a batch of one, so it is the very environment
+``make_vec`` steps. An episode ends by a fall (terminated) or at the
+configured length (truncated); call ``reset`` then, as Gymnasium expects."""
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from . import _native
+from ._checks import as_actions, seed_of
+from .vector import WIDTH, env_settings
+
+
+class QuadrupedEnv(gym.Env):
+    """A single quadcl environment: observation (225,) float32, action (12,) float32."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, robot=None, task="none", config=None, render_mode=None):
+        if render_mode is not None:
+            raise ValueError("quadcl environments do not render in Python; use `quadcl view` or `quadcl record`")
+        self.env_toml = env_settings(robot, config)
+        self._native = _native.NativeVecEnv(self.env_toml, str(task), 1, 0, 1)
+        self.task = self._native.task
+        clip = self._native.clip_actions
+        self.observation_space = spaces.Box(-np.inf, np.inf, (WIDTH,), np.float32)
+        self.action_space = spaces.Box(-clip, clip, (_native.ACT_DIM,), np.float32)
+        self._steps = 0
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        if options:
+            raise ValueError(f"reset takes no options (got {sorted(options)})")
+        obs, privileged = self._native.reset(seed_of(seed, self.np_random))
+        self._steps = 0
+        return obs[0], {"privileged_obs": privileged[0]}
+
+    def step(self, action):
+        a = as_actions(action, (_native.ACT_DIM,))
+        obs, rewards, terminated, truncated, privileged, final_obs, episodes = self._native.step(a[None, :])
+        self._steps += 1
+        done = bool(terminated[0] or truncated[0])
+        info = {"privileged_obs": privileged[0]}
+        if episodes:
+            e = episodes[0]
+            info["episode"] = {"r": e["return"], "l": self._steps, **{k: e[k] for k in ("performance", "lin_vel_err", "ang_vel_err", "fell")}}
+        return (final_obs if done else obs)[0], float(rewards[0]), bool(terminated[0]), bool(truncated[0]), info

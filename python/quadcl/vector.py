@@ -1,0 +1,114 @@
+"""``make_vec``: a batch of quadcl environments as a Gymnasium 1.x ``VectorEnv``,
+stepped in Rust in one call with the GIL released (the same batch the Rust
+learner trains on: the task's fault, command sampling, the paper's rewards,
+pushes and auto-reset as configured).
+
+Auto-reset is Gymnasium's ``SAME_STEP`` mode: a row that ends in a step
+returns the next episode's first observation, and the observation it ended
+with is ``infos["final_obs"]`` (rows where ``infos["_final_obs"]``).
+Finished episodes' figures are ``infos["episode"]`` (``r`` return, ``l``
+length in steps, ``performance``, ``lin_vel_err``, ``ang_vel_err``,
+``fell``; rows where ``infos["_episode"]``).
+"""
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from . import _native
+from ._checks import as_actions, seed_of
+
+WIDTH = _native.HISTORY_LEN * _native.OBS_DIM
+
+
+def env_settings(robot=None, config=None):
+    """The ``[env]`` settings (TOML text) of a shipped robot, a URDF file, or a run
+    file's or training config's ``[env]`` table."""
+    return _native.env_settings(robot, None if config is None else str(config))
+
+
+class QuadrupedVectorEnv(VectorEnv):
+    """N quadcl environments on one task (see the module's docs for the layout)."""
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(self, robot=None, task="none", num_envs=128, seed=0, config=None, num_threads=None, env_toml=None):
+        if env_toml is not None and (robot is not None or config is not None):
+            raise ValueError("give robot, config or env_toml, not several: each sets the [env] settings")
+        self.env_toml = env_settings(robot, config) if env_toml is None else str(env_toml)
+        self._native = _native.NativeVecEnv(self.env_toml, str(task), int(num_envs), seed_of(seed, None), num_threads)
+        self.num_envs = self._native.num_envs
+        self.task = self._native.task
+        self.control_dt = self._native.control_dt
+        self.max_episode_return = self._native.max_episode_return
+        clip = self._native.clip_actions
+        self.single_observation_space = spaces.Box(-np.inf, np.inf, (WIDTH,), np.float32)
+        self.single_action_space = spaces.Box(-clip, clip, (_native.ACT_DIM,), np.float32)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._np_random, _ = seeding.np_random(seed)
+        self._lengths = np.zeros(self.num_envs, dtype=np.int64)
+
+    def reset(self, *, seed=None, options=None):
+        """Reseeds and resets every environment: env i from (seed, i). Without a seed,
+        one is drawn from the generator the last seed set."""
+        if options:
+            raise ValueError(f"reset takes no options (got {sorted(options)})")
+        if seed is not None:
+            self._np_random, _ = seeding.np_random(seed_of(seed, None))
+        obs, privileged = self._native.reset(seed_of(seed, self._np_random))
+        self._lengths[:] = 0
+        return obs, {"privileged_obs": privileged}
+
+    def step(self, actions):
+        a = as_actions(actions, (self.num_envs, _native.ACT_DIM))
+        obs, rewards, terminated, truncated, privileged, final_obs, episodes = self._native.step(a)
+        self._lengths += 1
+        infos = {"privileged_obs": privileged}
+        done = terminated | truncated
+        if done.any():
+            infos["final_obs"] = final_obs
+            infos["_final_obs"] = done
+        if episodes:
+            infos["episode"], infos["_episode"] = _episode_arrays(episodes, self._lengths, self.num_envs)
+        self._lengths[done] = 0
+        return obs, rewards, terminated, truncated, infos
+
+    def close_extras(self, **kwargs):
+        self._native = None
+
+
+def _episode_arrays(episodes, lengths, n):
+    keys = ("r", "l", "performance", "lin_vel_err", "ang_vel_err", "fell")
+    out = {k: np.zeros(n, dtype=np.bool_ if k == "fell" else (np.int64 if k == "l" else np.float64)) for k in keys}
+    mask = np.zeros(n, dtype=np.bool_)
+    for e in episodes:
+        i = e["env"]
+        mask[i] = True
+        out["r"][i] = e["return"]
+        out["l"][i] = lengths[i]
+        for k in keys[2:]:
+            out[k][i] = e[k]
+    return out, mask
+
+
+def make_vec(robot=None, task="none", num_envs=128, seed=0, config=None, num_threads=None, env_toml=None, **kwargs):
+    """A ``gymnasium.vector.VectorEnv`` of ``num_envs`` quadcl environments on ``task``.
+
+    robot: a shipped robot (``"a1"``, the default; ``"aliengo"``, ``"anymal_c"``) or a URDF
+        file; or else ``config``: a run file or training config whose ``[env]`` is used.
+    task: ``"none"``, ``"crash:FL"``, ``"invert:RL"``, ``"noise:FR"``, combinations with ``+``.
+    seed: env i is seeded from (seed, i), as in the Rust learner.
+    num_threads: threads stepping the batch (None: every core, or ``RAYON_NUM_THREADS``).
+    env_toml: the ``[env]`` settings as TOML text instead (a ``Policy``'s or a ``Sequence``'s).
+    """
+    if kwargs:
+        # gymnasium.make_vec passes its own bookkeeping; anything else is a mistake.
+        unknown = sorted(k for k in kwargs if k not in ("render_mode",))
+        if unknown:
+            raise TypeError(f"make_vec got unknown arguments {unknown}")
+    return QuadrupedVectorEnv(
+        robot=robot, task=task, num_envs=num_envs, seed=seed, config=config, num_threads=num_threads, env_toml=env_toml
+    )
