@@ -55,6 +55,31 @@ fn one_env_rate(cfg: &EnvConfig, robot: &RobotModel, actions: &[f32], seconds: f
     Ok(steps as f64 / start.elapsed().as_secs_f64())
 }
 
+/// Control steps per second (envs x steps) of a batch of `n` envs for `seconds`, each env
+/// on its own row of the gait actions (env i at row step + 7 i).
+fn batch_rate(
+    cfg: &EnvConfig,
+    robot: &RobotModel,
+    task: &Perturbation,
+    actions: &[f32],
+    n: usize,
+    seconds: f64,
+) -> anyhow::Result<f64> {
+    let mut batch = VecEnv::new(cfg, robot, task, n, 1)?;
+    let mut batch_actions = vec![0.0f32; n * ACT_DIM];
+    let start = Instant::now();
+    let mut batch_steps = 0usize;
+    while start.elapsed().as_secs_f64() < seconds {
+        for (i, row) in batch_actions.chunks_mut(ACT_DIM).enumerate() {
+            let r = (batch_steps + 7 * i) % ACTION_ROWS;
+            row.copy_from_slice(&actions[r * ACT_DIM..(r + 1) * ACT_DIM]);
+        }
+        batch.step(&batch_actions)?;
+        batch_steps += 1;
+    }
+    Ok((batch_steps * n) as f64 / start.elapsed().as_secs_f64())
+}
+
 /// Adds the environment figures to `report`.
 pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Value>) -> anyhow::Result<()> {
     let cfg = EnvConfig::default();
@@ -71,19 +96,10 @@ pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Va
     let one_implicit = one_env_rate(&implicit, &robot, &actions, seconds)?;
 
     // A batch on all threads.
-    let mut batch = VecEnv::new(&cfg, &robot, &task, BATCH, 1)?;
-    let mut batch_actions = vec![0.0f32; BATCH * ACT_DIM];
-    let start = Instant::now();
-    let mut batch_steps = 0usize;
-    while start.elapsed().as_secs_f64() < seconds {
-        for (i, row) in batch_actions.chunks_mut(ACT_DIM).enumerate() {
-            let r = (batch_steps + 7 * i) % ACTION_ROWS;
-            row.copy_from_slice(&actions[r * ACT_DIM..(r + 1) * ACT_DIM]);
-        }
-        batch.step(&batch_actions)?;
-        batch_steps += 1;
-    }
-    let all = (batch_steps * BATCH) as f64 / start.elapsed().as_secs_f64();
+    let all = batch_rate(&cfg, &robot, &task, &actions, BATCH, seconds)?;
+    // The Python package's reference (issue 40): 128 envs, the batch the learner steps, on one thread.
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let batch128_1t = one_thread.install(|| batch_rate(&cfg, &robot, &task, &actions, 128, seconds))?;
 
     report.insert("env_control_steps_per_s_1t".into(), json!(one.round()));
     report.insert("env_control_steps_per_s_all".into(), json!(all.round()));
@@ -91,6 +107,7 @@ pub fn measure(seconds: f64, report: &mut serde_json::Map<String, serde_json::Va
     report.insert("env_control_steps_per_s_1t_dt0005_x4".into(), json!(one_reference.round()));
     report.insert("env_control_steps_per_s_1t_implicit_coriolis".into(), json!(one_implicit.round()));
     report.insert("env_batch".into(), json!(BATCH));
+    report.insert("env_control_steps_per_s_batch128_1t".into(), json!(batch128_1t.round()));
     report.insert("threads".into(), json!(rayon::current_num_threads()));
     report.insert("physics_dt".into(), json!((cfg.physics_dt as f64 * 1e6).round() / 1e6));
     report.insert("decimation".into(), json!(cfg.decimation));
