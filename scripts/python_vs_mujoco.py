@@ -42,26 +42,25 @@ def batch_actions(rows, step):
     return rows[index]
 
 
+def steps_per_s(step, rows, seconds):
+    """Control steps per second (envs x steps) of `step(actions)` over `seconds`."""
+    steps, start = 0, time.perf_counter()
+    while time.perf_counter() - start < seconds:
+        step(batch_actions(rows, steps))
+        steps += 1
+    return steps * ENVS / (time.perf_counter() - start)
+
+
 def python_quadcl_rate(rows, seconds):
     envs = quadcl.make_vec(num_envs=ENVS, seed=0, num_threads=1)
     envs.reset(seed=0)
-    steps, start = 0, time.perf_counter()
-    while time.perf_counter() - start < seconds:
-        envs.step(batch_actions(rows, steps))
-        steps += 1
-    return steps * ENVS / (time.perf_counter() - start)
+    return steps_per_s(envs.step, rows, seconds)
 
 
 def mujoco_rate(rows, seconds):
     pb.DT, pb.DECIMATION, pb.EPISODE_STEPS = DT, DECIMATION, int(20.0 / (DT * DECIMATION))
     pb.a1_model = lambda: a1_model(DT, mujoco.mjtIntegrator.mjINT_IMPLICITFAST)
-    envs = pb.Envs(ENVS, 1, 0)
-    rows64 = rows.astype(np.float64)
-    steps, start = 0, time.perf_counter()
-    while time.perf_counter() - start < seconds:
-        envs.step(batch_actions(rows64, steps))
-        steps += 1
-    return steps * ENVS / (time.perf_counter() - start)
+    return steps_per_s(pb.Envs(ENVS, 1, 0).step, rows.astype(np.float64), seconds)
 
 
 def rust_rate(binary, seconds):
