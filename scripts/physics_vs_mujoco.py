@@ -87,12 +87,17 @@ def mujoco_rate(dt, decimation, seconds):
     return steps / (time.perf_counter() - start)
 
 
-def quadcl_rates(binary, seconds):
+def bench_env(binary, seconds):
+    """`quadcl bench --json --only env`'s report (every `env_*` figure)."""
     out = subprocess.run(
         [binary, "bench", "--json", "--only", "env", "--seconds", str(seconds)],
         check=True, capture_output=True, text=True,
     ).stdout
-    report = json.loads(out)
+    return json.loads(out)
+
+
+def quadcl_rates(binary, seconds):
+    report = bench_env(binary, seconds)
     return report["env_control_steps_per_s_1t"], report["env_control_steps_per_s_1t_dt0005_x4"]
 
 

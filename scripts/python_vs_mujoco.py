@@ -23,7 +23,6 @@ Prints the medians and the two ratios issue 40 asks for: Python quadcl / MuJoCo
 import argparse
 import json
 import statistics
-import subprocess
 import time
 
 import mujoco
@@ -32,7 +31,7 @@ import numpy as np
 import python_ppo_baseline as pb
 import quadcl
 from mujoco_a1 import ROOT, a1_model
-from physics_vs_mujoco import gait_actions
+from physics_vs_mujoco import bench_env, gait_actions
 
 ENVS, DT, DECIMATION = 128, 0.01, 2
 
@@ -64,9 +63,7 @@ def mujoco_rate(rows, seconds):
 
 
 def rust_rate(binary, seconds):
-    out = subprocess.run([binary, "bench", "--json", "--only", "env", "--seconds", str(seconds)],
-                         check=True, capture_output=True, text=True).stdout
-    return json.loads(out)["env_control_steps_per_s_batch128_1t"]
+    return bench_env(binary, seconds)["env_control_steps_per_s_batch128_1t"]
 
 
 def main():

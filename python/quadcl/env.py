@@ -26,23 +26,19 @@ class QuadrupedEnv(gym.Env):
         clip = self._native.clip_actions
         self.observation_space = spaces.Box(-np.inf, np.inf, (WIDTH,), np.float32)
         self.action_space = spaces.Box(-clip, clip, (_native.ACT_DIM,), np.float32)
-        self._steps = 0
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
         if options:
             raise ValueError(f"reset takes no options (got {sorted(options)})")
         obs, privileged = self._native.reset(seed_of(seed, self.np_random))
-        self._steps = 0
         return obs[0], {"privileged_obs": privileged[0]}
 
     def step(self, action):
         a = as_actions(action, (_native.ACT_DIM,))
         obs, rewards, terminated, truncated, privileged, final_obs, episodes = self._native.step(a[None, :])
-        self._steps += 1
-        done = bool(terminated[0] or truncated[0])
         info = {"privileged_obs": privileged[0]}
         if episodes:
             e = episodes[0]
-            info["episode"] = {"r": e["return"], "l": self._steps, **{k: e[k] for k in ("performance", "lin_vel_err", "ang_vel_err", "fell")}}
-        return (final_obs if done else obs)[0], float(rewards[0]), bool(terminated[0]), bool(truncated[0]), info
+            info["episode"] = {"r": e["return"], "l": e["steps"], **{k: e[k] for k in ("performance", "lin_vel_err", "ang_vel_err", "fell")}}
+        return (obs if final_obs is None else final_obs)[0], float(rewards[0]), bool(terminated[0]), bool(truncated[0]), info

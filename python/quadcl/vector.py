@@ -49,7 +49,6 @@ class QuadrupedVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._np_random, _ = seeding.np_random(seed)
-        self._lengths = np.zeros(self.num_envs, dtype=np.int64)
 
     def reset(self, *, seed=None, options=None):
         """Reseeds and resets every environment: env i from (seed, i). Without a seed,
@@ -59,28 +58,24 @@ class QuadrupedVectorEnv(VectorEnv):
         if seed is not None:
             self._np_random, _ = seeding.np_random(seed_of(seed, None))
         obs, privileged = self._native.reset(seed_of(seed, self._np_random))
-        self._lengths[:] = 0
         return obs, {"privileged_obs": privileged}
 
     def step(self, actions):
         a = as_actions(actions, (self.num_envs, _native.ACT_DIM))
         obs, rewards, terminated, truncated, privileged, final_obs, episodes = self._native.step(a)
-        self._lengths += 1
         infos = {"privileged_obs": privileged}
-        done = terminated | truncated
-        if done.any():
+        if final_obs is not None:
             infos["final_obs"] = final_obs
-            infos["_final_obs"] = done
+            infos["_final_obs"] = terminated | truncated
         if episodes:
-            infos["episode"], infos["_episode"] = _episode_arrays(episodes, self._lengths, self.num_envs)
-        self._lengths[done] = 0
+            infos["episode"], infos["_episode"] = _episode_arrays(episodes, self.num_envs)
         return obs, rewards, terminated, truncated, infos
 
     def close_extras(self, **kwargs):
         self._native = None
 
 
-def _episode_arrays(episodes, lengths, n):
+def _episode_arrays(episodes, n):
     keys = ("r", "l", "performance", "lin_vel_err", "ang_vel_err", "fell")
     out = {k: np.zeros(n, dtype=np.bool_ if k == "fell" else (np.int64 if k == "l" else np.float64)) for k in keys}
     mask = np.zeros(n, dtype=np.bool_)
@@ -88,7 +83,7 @@ def _episode_arrays(episodes, lengths, n):
         i = e["env"]
         mask[i] = True
         out["r"][i] = e["return"]
-        out["l"][i] = lengths[i]
+        out["l"][i] = e["steps"]
         for k in keys[2:]:
             out[k][i] = e[k]
     return out, mask

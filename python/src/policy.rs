@@ -133,7 +133,7 @@ pub fn evaluate<'py>(
             let cfg = env_from_toml(&env_toml)?;
             let perturbation = parse_task(&task)?;
             let env = SimTrainEnv::new(&cfg, &perturbation, episodes, seed)?;
-            let max_steps = (f64::from(cfg.episode_s) / f64::from(cfg.policy_dt())).ceil() as usize + 10;
+            let max_steps = cfg.evaluation_step_bound();
             Ok((env, max_steps, quadcl::engine::max_episode_return(&cfg), perturbation.to_string()))
         })
     })?;

@@ -10,9 +10,11 @@
 //! - actions: (N, ACT_DIM) f32, finite (a non-finite action is refused before
 //!   any env steps, so a bad call changes nothing);
 //! - step: rewards (N,) f32, terminated (N,) bool (fell), truncated (N,) bool
-//!   (time-out), and final_observation (N, W): for a row that ended, the history
-//!   it ended with (the row of `observation` is already the next episode's
-//!   first); other rows repeat `observation`.
+//!   (time-out), and final_observation (N, W), only when a row ended: for a row
+//!   that ended, the history it ended with (the row of `observation` is already
+//!   the next episode's first); other rows repeat `observation`;
+//! - episodes: one dict per episode that ended (its env, return, performance,
+//!   length in steps and seconds, tracking errors, whether it fell).
 
 use crate::guard;
 use crate::settings::{env_from_toml, parse_task};
@@ -34,7 +36,6 @@ pub struct NativeVecEnv {
     pool: Option<rayon::ThreadPool>,
     task: String,
     control_dt: f64,
-    episode_s: f64,
     max_return: f64,
     clip_actions: f32,
 }
@@ -42,14 +43,15 @@ pub struct NativeVecEnv {
 /// (observation, privileged).
 type Observed<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>);
 
-/// One step's arrays: (observation, rewards, terminated, truncated, privileged, final_observation, episodes).
+/// One step's arrays: (observation, rewards, terminated, truncated, privileged,
+/// final_observation (None when no row ended), episodes).
 type StepArrays<'py> = (
     Bound<'py, PyArray2<f32>>,
     Bound<'py, PyArray1<f32>>,
     Bound<'py, PyArray1<bool>>,
     Bound<'py, PyArray1<bool>>,
     Bound<'py, PyArray2<f32>>,
-    Bound<'py, PyArray2<f32>>,
+    Option<Bound<'py, PyArray2<f32>>>,
     Vec<Bound<'py, PyDict>>,
 );
 
@@ -107,7 +109,6 @@ impl NativeVecEnv {
                     pool,
                     task: task.to_string(),
                     control_dt: f64::from(cfg.policy_dt()),
-                    episode_s: f64::from(cfg.episode_s),
                     max_return: quadcl::engine::max_episode_return(&cfg),
                     clip_actions: cfg.clip_actions,
                 })
@@ -132,12 +133,6 @@ impl NativeVecEnv {
         self.control_dt
     }
 
-    /// An episode's length at most, seconds (then it is truncated).
-    #[getter]
-    fn episode_s(&self) -> f64 {
-        self.episode_s
-    }
-
     /// Actions are clipped to [-clip_actions, clip_actions] before they are scaled.
     #[getter]
     fn clip_actions(&self) -> f32 {
@@ -152,22 +147,11 @@ impl NativeVecEnv {
 
     /// Reseeds and resets every env (env i from (seed, i)): (observation, privileged).
     fn reset<'py>(&mut self, py: Python<'py>, seed: u64) -> PyResult<Observed<'py>> {
-        let (obs, privileged) = py.detach(|| {
-            guard("reset", || {
-                self.run(|env| {
-                    env.reset(seed)?;
-                    Ok((env.obs_histories().to_vec(), env.privileged_observations().to_vec()))
-                })
-            })
-        })?;
-        Ok((matrix(py, obs, WIDTH)?, matrix(py, privileged, PRIV_OBS_DIM)?))
-    }
-
-    /// The current (observation, privileged), without stepping.
-    fn observe<'py>(&self, py: Python<'py>) -> PyResult<Observed<'py>> {
+        py.detach(|| guard("reset", || self.run(|env| env.reset(seed))))?;
+        let env = self.env();
         Ok((
-            matrix(py, self.env().obs_histories().to_vec(), WIDTH)?,
-            matrix(py, self.env().privileged_observations().to_vec(), PRIV_OBS_DIM)?,
+            matrix(py, env.obs_histories().to_vec(), WIDTH)?,
+            matrix(py, env.privileged_observations().to_vec(), PRIV_OBS_DIM)?,
         ))
     }
 
@@ -193,18 +177,21 @@ impl NativeVecEnv {
                         actions[i]
                     );
                 }
+                // The histories before the step: an ending row's final history continues its row.
                 let before = self.env().obs_histories().to_vec();
                 let step = self.run(|env| env.step(&actions))?;
                 let obs = self.env().obs_histories().to_vec();
-                let mut final_obs = obs.clone();
-                for i in 0..n {
-                    if step.terminated[i] || step.truncated[i] {
+                let ended = |i: usize| step.terminated[i] || step.truncated[i];
+                let final_obs = (0..n).any(ended).then(|| {
+                    let mut final_obs = obs.clone();
+                    for i in (0..n).filter(|&i| ended(i)) {
                         let row = &mut final_obs[i * WIDTH..(i + 1) * WIDTH];
                         row[..WIDTH - OBS_DIM].copy_from_slice(&before[i * WIDTH + OBS_DIM..(i + 1) * WIDTH]);
                         row[WIDTH - OBS_DIM..]
                             .copy_from_slice(&step.next_obs_before_reset[i * OBS_DIM..(i + 1) * OBS_DIM]);
                     }
-                }
+                    final_obs
+                });
                 let privileged = self.env().privileged_observations().to_vec();
                 Ok((obs, step, final_obs, privileged))
             })
@@ -219,6 +206,7 @@ impl NativeVecEnv {
                 d.set_item("return", e.episode_return)?;
                 d.set_item("performance", f64::from(e.episode_return) / self.max_return)?;
                 d.set_item("length_s", e.length_s)?;
+                d.set_item("steps", (f64::from(e.length_s) / self.control_dt).round() as u64)?;
                 d.set_item("lin_vel_err", e.lin_vel_err)?;
                 d.set_item("ang_vel_err", e.ang_vel_err)?;
                 d.set_item("fell", e.fell)?;
@@ -231,7 +219,7 @@ impl NativeVecEnv {
             PyArray1::from_vec(py, step.terminated),
             PyArray1::from_vec(py, step.truncated),
             matrix(py, privileged, PRIV_OBS_DIM)?,
-            matrix(py, final_obs, WIDTH)?,
+            final_obs.map(|f| matrix(py, f, WIDTH)).transpose()?,
             episodes,
         ))
     }

@@ -75,8 +75,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     }
     let env_cfg = &env_cfg;
     let mut env = SimTrainEnv::new(env_cfg, &task, args.episodes, args.seed)?;
-    // An episode lasts at most `episode_s`; allow a margin.
-    let max_steps = (f64::from(env_cfg.episode_s) / f64::from(env_cfg.policy_dt())).ceil() as usize + 10;
+    let max_steps = env_cfg.evaluation_step_bound();
     let report = match &args.policy_cmd {
         None => quadcl::rl::evaluate(agent, &mut env, &task.to_string(), args.seed, max_steps)?,
         Some(command) => {

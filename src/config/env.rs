@@ -242,6 +242,12 @@ impl EnvConfig {
         self.physics_dt * self.decimation as f32
     }
 
+    /// Control steps an evaluation runs at most: an episode's length (`episode_s`) in
+    /// policy steps, plus a margin of 10 (an env that has not ended by then is an error).
+    pub fn evaluation_step_bound(&self) -> usize {
+        (f64::from(self.episode_s) / f64::from(self.policy_dt())).ceil() as usize + 10
+    }
+
     /// Checks the values that would make the simulation meaningless; errors name the key.
     pub fn validate(&self) -> anyhow::Result<()> {
         let key = |name: &str| format!("env.{name}");

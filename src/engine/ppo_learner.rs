@@ -260,7 +260,7 @@ impl Learner for PpoTaskLearner {
         Self::install(agent, &state)?;
         agent.task = task;
         agent.recall = true;
-        let max_steps = (f64::from(env_cfg.episode_s) / f64::from(env_cfg.policy_dt())).ceil() as usize + 10;
+        let max_steps = env_cfg.evaluation_step_bound();
         let report = crate::rl::evaluate(agent, env.as_mut(), name, seed, max_steps);
         Self::install(agent, &saved.0)?;
         agent.task = saved.1;
