@@ -38,7 +38,10 @@ class QuadrupedVectorEnv(VectorEnv):
         if env_toml is not None and (robot is not None or config is not None):
             raise ValueError("give robot, config or env_toml, not several: each sets the [env] settings")
         self.env_toml = env_settings(robot, config) if env_toml is None else str(env_toml)
-        self._native = _native.NativeVecEnv(self.env_toml, str(task), int(num_envs), seed_of(seed, None), num_threads)
+        # No seed: one drawn from fresh entropy, as Gymnasium does.
+        self._np_random, _ = seeding.np_random(None if seed is None else seed_of(seed, None))
+        seed = seed_of(seed, self._np_random)
+        self._native = _native.NativeVecEnv(self.env_toml, str(task), int(num_envs), seed, num_threads)
         self.num_envs = self._native.num_envs
         self.task = self._native.task
         self.control_dt = self._native.control_dt
@@ -48,7 +51,6 @@ class QuadrupedVectorEnv(VectorEnv):
         self.single_action_space = spaces.Box(-clip, clip, (_native.ACT_DIM,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self._np_random, _ = seeding.np_random(seed)
 
     def reset(self, *, seed=None, options=None):
         """Reseeds and resets every environment: env i from (seed, i). Without a seed,

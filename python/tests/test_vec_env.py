@@ -44,6 +44,12 @@ def test_the_same_seed_gives_the_same_numbers_and_another_seed_others():
     assert not np.array_equal(a[0], c[0])
 
 
+def test_without_a_seed_the_envs_draw_one():
+    envs = quadcl.make_vec(num_envs=2, seed=None)
+    obs, _ = envs.reset()
+    assert np.isfinite(envs.step(np.zeros((2, quadcl.ACT_DIM), np.float32))[0]).all()
+
+
 def test_one_thread_and_every_core_give_the_same_numbers():
     one = rollout(quadcl.make_vec(num_envs=6, seed=2, num_threads=1), 30, seed=2)
     many = rollout(quadcl.make_vec(num_envs=6, seed=2, num_threads=2), 30, seed=2)
