@@ -41,6 +41,7 @@ fn one_iteration_reports_every_namespaced_metric() {
         "plasticity/selected_abs_w/actor.l0",
         "plasticity/trainable_share/cenet_encoder.l1",
         "time/plasticity_s",
+        "time/masks_s",
     ] {
         let v = metrics[0].get(key).unwrap_or_else(|| panic!("missing {key}: {:?}", metrics[0].keys()));
         assert!(v.is_finite(), "{key} = {v}");

@@ -12,7 +12,8 @@
 //! iterations over their wall time), `iteration_ms` (mean), the split per
 //! iteration into `physics_ms` (env.step), `policy_ms` (policy and critic
 //! forwards of the rollout, observation normalisation), `update_ms` (the
-//! epochs x minibatches update) and `other_ms` (GAE, bookkeeping), and
+//! epochs x minibatches update) and `other_ms` (GAE, bookkeeping; of it
+//! `masks_ms` drawing the iteration's masks and `plasticity_ms` the probes), and
 //! `iterations` measured. On a machine shared with other work, also
 //! `fastest_iteration_ms` (the least loaded iteration: compare binaries by it
 //! when the means drift) and `cores_busy` (the process's CPU time over the wall
@@ -87,6 +88,9 @@ fn measure_config(
     report.insert(format!("{prefix}_policy_ms"), json!(round(policy_ms)));
     report.insert(format!("{prefix}_update_ms"), json!(round(update_ms)));
     report.insert(format!("{prefix}_other_ms"), json!(round(iteration_ms - physics_ms - policy_ms - update_ms)));
+    // Parts of `other`: drawing the iteration's masks, and the plasticity probes.
+    report.insert(format!("{prefix}_masks_ms"), json!(round(mean_ms(&rows, "time/masks_s"))));
+    report.insert(format!("{prefix}_plasticity_ms"), json!(round(mean_ms(&rows, "time/plasticity_s"))));
     report.insert(format!("{prefix}_iterations"), json!(rows.len()));
     report.insert(format!("{prefix}_fastest_iteration_ms"), json!(round(fastest_ms)));
     if let Some(cpu) = cpu {

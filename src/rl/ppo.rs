@@ -104,7 +104,9 @@ impl PpoLearner {
     ) -> anyhow::Result<Metrics> {
         let start = Instant::now();
         self.agent.begin_iteration(self.iteration, &mut self.rng)?;
+        let masks_s = start.elapsed().as_secs_f64();
         let mut metrics = self.collect_rollout(env)?;
+        metrics.insert("time/masks_s".into(), masks_s);
         if let Some(churn) = self.agent.actor.mask_churn() {
             metrics.insert("charts/mask_churn_actor".into(), churn);
         }
