@@ -13,7 +13,8 @@
 //! One function per figure takes the data ([`RunData`], read by [`load_run`] from a run's
 //! `metrics.json` or a training's `metrics.jsonl`) and a plotters drawing area; [`Figure`]
 //! names them. A [`Curve`] may carry a band (low, high per point), drawn shaded, for a spread
-//! over seeds. Text is DejaVu Sans, compiled in (`style`; licence in `DejaVuSans.LICENSE`).
+//! over seeds: a sweep folder is drawn one run per group, the seeds' mean with their range
+//! (`seeds`). Text is DejaVu Sans, compiled in (`style`; licence in `DejaVuSans.LICENSE`).
 //!
 //! `metrics.json` keeps only the finite values of a measure, not the iterations they came
 //! from; a measure with fewer values than its step ran iterations (the tracking errors and
@@ -29,6 +30,7 @@ mod load;
 mod panel;
 mod plasticity;
 mod render;
+mod seeds;
 mod sequence;
 mod style;
 mod task_curves;
@@ -40,6 +42,7 @@ pub use load::{load_run, RUN_METRICS, TRAIN_METRICS};
 pub use panel::{draw_line_panel, Boundary, LinePanel};
 pub use plasticity::{draw_plasticity, plasticity_size};
 pub use render::{render_png, render_svg, write_figures};
+pub use seeds::{curve_across_seeds, is_sweep, load_sweep, runs_across_seeds};
 pub use sequence::{draw_sequence, sequence_size};
 pub use task_curves::{draw_task_curves, task_curves_size};
 
