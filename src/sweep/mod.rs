@@ -31,7 +31,7 @@ pub use bootstrap::{estimate, Estimate};
 pub use collect::{collect, collect_and_write, markdown, Collected, CollectedGroup, MEASURES};
 pub use file::{SweepFile, SEED_AXIS};
 pub use local::{run_local, LocalOptions, LocalReport};
-pub use plan::{plan, Cell, Plan};
+pub use plan::{check, plan, Cell, Plan};
 pub use slurm::{submit, write_sbatch, SlurmOptions};
 pub use status::{status, status_lines, CellState, CellStatus};
 

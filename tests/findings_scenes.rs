@@ -1,0 +1,43 @@
+//! The findings' sweep files (issue 34, `scenes/findings/`) plan as their headers say: every
+//! cell's run file is checked (`sweep::check`, nothing written), and each sweep has its cells
+//! and at least three seeds per variant (the budget is the base file's, the same for all).
+//! fig11-transfer measures forward transfer against fig11-reference's seed-1 run, so until
+//! that has run its planning is refused naming the missing file.
+
+use quadcl::sweep::check;
+use std::path::{Path, PathBuf};
+
+fn findings(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/findings").join(format!("{name}.toml"))
+}
+
+#[test]
+fn each_findings_sweep_plans_its_cells_with_three_seeds_per_variant() {
+    for (name, cells, variants) in [
+        ("sequence-12", 3, 1),
+        ("fig4-methods", 30, 10),
+        ("fig5-selection", 9, 3),
+        ("fig8-plasticity", 12, 4),
+        ("fig11-reference", 3, 1),
+    ] {
+        let plan = check(&findings(name)).unwrap_or_else(|e| panic!("{name}: {e:#}"));
+        assert_eq!(plan.cells.len(), cells, "{name}");
+        let groups = plan.groups();
+        assert_eq!(groups.len(), variants, "{name}");
+        for (group, indices) in &groups {
+            assert!(indices.len() >= 3, "{name}: {group} has {} seeds", indices.len());
+        }
+    }
+}
+
+#[test]
+fn fig11_transfer_waits_for_its_reference_run_and_says_which() {
+    let reference = Path::new(env!("CARGO_MANIFEST_DIR")).join("runs/findings/fig11-reference/runs/0/metrics.json");
+    if reference.exists() {
+        let plan = check(&findings("fig11-transfer")).unwrap();
+        assert_eq!((plan.cells.len(), plan.groups().len()), (9, 3));
+    } else {
+        let err = format!("{:#}", check(&findings("fig11-transfer")).unwrap_err());
+        assert!(err.contains("fig11-reference/runs/0/metrics.json"), "{err}");
+    }
+}
