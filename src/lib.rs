@@ -16,7 +16,7 @@
 //! | [`export`] | a learned task as plain dense networks for deployment: ONNX and PyTorch-named safetensors with the robot's contract as metadata | `config`, `util`, `sim`, `nn`, `rl` |
 //! | [`cl`] | continual learning around the learner: the method's hooks and switches, sequences, the continual measures | `config`, `util`, `sim`, `nn`, `rl` |
 //! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl`, `record`, `log` |
-//! | [`plot`] | figures of runs as PNG and SVG (`quadcl plot`): training curves, the whole sequence, the evaluation matrix, plasticity | `util`, `cl` |
+//! | [`plot`] | figures of runs as PNG and SVG (`quadcl plot`): training curves, the whole sequence, the evaluation matrix, plasticity; a sweep folder as its groups across seeds | `util`, `cl`, `sweep` |
 //! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine`, `record`, `log` |
 //! | [`record`] | recorders of simulation steps: episodes as MCAP for Foxglove and as Rerun `.rrd` or a live Rerun viewer (`quadcl record`, `quadcl view`) | `util`, `config`, `sim`, `nn`, `rl` |
 //! | [`sweep`] | grids of runs: a sweep file planned into cells, run here (child processes) or as a Slurm array job, status, collected with bootstrap intervals over seeds | `util`, `engine` |
