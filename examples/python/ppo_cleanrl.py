@@ -122,8 +122,9 @@ def main():
             priv_norm.update(raw_priv)
             x, xp = norm(raw), priv_norm(raw_priv)
             with torch.no_grad():
-                action = agent.dist(torch.from_numpy(x)).sample()
-                logp = agent.dist(torch.from_numpy(x)).log_prob(action).sum(-1)
+                dist = agent.dist(torch.from_numpy(x))
+                action = dist.sample()
+                logp = dist.log_prob(action).sum(-1)
                 value = agent.value(torch.from_numpy(xp))
             history, reward, terminated, truncated, infos = envs.step(action.numpy())
             obs_buf[k], priv_buf[k], act_buf[k], logp_buf[k], val_buf[k] = x, xp, action, logp, value
