@@ -7,7 +7,7 @@
 use super::data::{Curve, Measure, RunData, StepCurves};
 use super::load::load_run;
 use crate::cl::EvalMatrix;
-use crate::sweep::collect;
+use crate::sweep::{Plan, RunMeasures};
 use anyhow::{ensure, Context};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -46,22 +46,19 @@ pub fn runs_across_seeds(label: &str, runs: &[RunData]) -> anyhow::Result<RunDat
             tasks(run)
         );
     }
-    fn step_of(run: &RunData, i: usize) -> &StepCurves {
-        &run.steps[i]
-    }
     let steps = (0..first.steps.len())
         .map(|i| {
-            let of = |r| step_of(r, i);
+            let seeds: Vec<&StepCurves> = runs.iter().map(|r| &r.steps[i]).collect();
             let mut step = StepCurves {
-                task: first.steps[i].task.clone(),
-                iterations: runs.iter().map(|r| of(r).iterations).max().unwrap_or(0),
+                task: seeds[0].task.clone(),
+                iterations: seeds.iter().map(|s| s.iterations).max().unwrap_or(0),
                 ..Default::default()
             };
             for m in Measure::ALL {
-                *step.curve_mut(m) = curve_across_seeds(&runs.iter().map(|r| of(r).curve(m)).collect::<Vec<_>>());
+                *step.curve_mut(m) = curve_across_seeds(&seeds.iter().map(|s| s.curve(m)).collect::<Vec<_>>());
             }
-            for name in of(first).plasticity.keys() {
-                let curves: Vec<&Curve> = runs.iter().filter_map(|r| of(r).plasticity.get(name)).collect();
+            for name in seeds[0].plasticity.keys() {
+                let curves: Vec<&Curve> = seeds.iter().filter_map(|s| s.plasticity.get(name)).collect();
                 if curves.len() == runs.len() {
                     step.plasticity.insert(name.clone(), curve_across_seeds(&curves));
                 }
@@ -109,21 +106,23 @@ pub fn is_sweep(path: &Path) -> bool {
 /// across seeds, labelled with the group's name and its number of seeds (`capacity=0.2 (mean
 /// of 3 seeds, range shaded)`).
 pub fn load_sweep(dir: &Path) -> anyhow::Result<Vec<RunData>> {
-    let table = collect(dir)?;
+    // The plan's groups and finished cells, as `sweep collect` has them, without its intervals.
+    let plan = Plan::load(dir)?;
     let mut out = Vec::new();
-    for group in &table.groups {
-        let runs = group
-            .cells
-            .iter()
-            .filter(|c| c.finished)
-            .map(|c| load_run(&dir.join(&c.run), None))
-            .collect::<anyhow::Result<Vec<_>>>()?;
+    for (name, indices) in plan.groups() {
+        let mut runs = Vec::new();
+        for i in indices {
+            let run = dir.join(&plan.cells[i].run);
+            if RunMeasures::load(&run)?.is_some_and(|m| m.finished()) {
+                runs.push(load_run(&run, None)?);
+            }
+        }
         if runs.is_empty() {
             continue;
         }
         let seeds =
             if runs.len() == 1 { "1 seed".to_string() } else { format!("mean of {} seeds, range shaded", runs.len()) };
-        out.push(runs_across_seeds(&format!("{} ({seeds})", group.name), &runs)?);
+        out.push(runs_across_seeds(&format!("{name} ({seeds})"), &runs)?);
     }
     ensure!(
         !out.is_empty(),

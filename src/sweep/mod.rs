@@ -28,7 +28,7 @@ pub mod slurm;
 pub mod status;
 
 pub use bootstrap::{estimate, Estimate};
-pub use collect::{collect, collect_and_write, markdown, Collected, CollectedGroup, MEASURES};
+pub use collect::{collect, collect_and_write, markdown, Collected, CollectedGroup, RunMeasures, MEASURES};
 pub use file::{SweepFile, SEED_AXIS};
 pub use local::{run_local, LocalOptions, LocalReport};
 pub use plan::{check, plan, Cell, Plan};
