@@ -110,10 +110,10 @@ fn si_omega_is_the_path_integral_of_the_task_gradient_on_a_quadratic() {
 }
 
 // The toy's own weights: its losses are not the robot's, so the robot's tuned
-// defaults (ER's beta 0.01) do not carry over.
+// defaults (ER's beta 0.01, RWalk's lambda 0.1) do not carry over.
 const TOY: &str =
     "seed = 2\niterations = 60\n[run]\nlearner = \"toy\"\n[method.ewc]\nlambda = 100.0\n[method.si]\nc = 1.0\n\
-[method.er]\nbeta = 1.0\n[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n";
+[method.er]\nbeta = 1.0\n[method.rwalk]\nlambda = 1.0\n[[task]]\nname = \"crash:FL\"\n[[task]]\nname = \"invert:RR\"\n";
 
 fn toy_run(method: &str, dir: &std::path::Path) -> quadcl::engine::MetricsFile {
     let cfg = dir.join("run.toml");
