@@ -58,18 +58,21 @@ impl Curve {
 
     /// The mean of `curves` at each iteration that all of them have (no band).
     pub fn mean_of(curves: &[&Curve]) -> Self {
+        let points = Self::aligned(curves).into_iter().map(|(x, ys)| (x, ys.iter().sum::<f64>() / ys.len() as f64));
+        Self { points: points.collect(), band: None }
+    }
+
+    /// The x values every curve of `curves` has a point at (matched to 1/1024 of an
+    /// iteration), in order, each with the curves' values there.
+    pub fn aligned(curves: &[&Curve]) -> Vec<(f64, Vec<f64>)> {
         let key = |x: f64| (x * 1024.0).round() as i64;
-        let mut sums: BTreeMap<i64, (f64, f64, usize)> = BTreeMap::new();
+        let mut at: BTreeMap<i64, (f64, Vec<f64>)> = BTreeMap::new();
         for curve in curves {
             for (x, y) in &curve.points {
-                let entry = sums.entry(key(*x)).or_insert((*x, 0.0, 0));
-                entry.1 += y;
-                entry.2 += 1;
+                at.entry(key(*x)).or_insert((*x, Vec::new())).1.push(*y);
             }
         }
-        let points =
-            sums.into_values().filter(|(_, _, n)| *n == curves.len()).map(|(x, sum, n)| (x, sum / n as f64)).collect();
-        Self { points, band: None }
+        at.into_values().filter(|(_, ys)| ys.len() == curves.len()).collect()
     }
 
     /// The smallest and largest value of the line and its band, if it has any point.

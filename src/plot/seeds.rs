@@ -9,20 +9,12 @@ use super::load::load_run;
 use crate::cl::EvalMatrix;
 use crate::sweep::{Plan, RunMeasures};
 use anyhow::{ensure, Context};
-use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The mean and range of `curves` at each iteration that all of them have.
 pub fn curve_across_seeds(curves: &[&Curve]) -> Curve {
-    let key = |x: f64| (x * 1024.0).round() as i64;
-    let mut at: BTreeMap<i64, (f64, Vec<f64>)> = BTreeMap::new();
-    for curve in curves {
-        for (x, y) in &curve.points {
-            at.entry(key(*x)).or_insert((*x, Vec::new())).1.push(*y);
-        }
-    }
     let (mut points, mut band) = (Vec::new(), Vec::new());
-    for (x, ys) in at.into_values().filter(|(_, ys)| ys.len() == curves.len()) {
+    for (x, ys) in Curve::aligned(curves) {
         let low = ys.iter().copied().fold(f64::INFINITY, f64::min);
         let high = ys.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         points.push((x, ys.iter().sum::<f64>() / ys.len() as f64));
