@@ -4,7 +4,7 @@
 //! from the `metrics.json` it came from. Collecting writes nothing here: the
 //! tables are computed and compared with the committed bytes.
 
-use quadcl::sweep::{collect, markdown};
+use quadcl::sweep::{collect, collect_tasks, markdown, tasks_markdown};
 use std::path::{Path, PathBuf};
 
 fn sweep_folders(dir: &Path, found: &mut Vec<PathBuf>) {
@@ -41,7 +41,52 @@ fn every_committed_sweeps_tables_are_what_collect_prints_from_its_run_files() {
             "{}: collected.json differs from `quadcl sweep collect`",
             dir.display()
         );
+        // The per-task tables, where the folder ships them (`sweep collect --per-task`).
+        if let Ok(md) = std::fs::read_to_string(dir.join("collected-tasks.md")) {
+            let tasks = collect_tasks(&dir).unwrap_or_else(|e| panic!("{}: {e:#}", dir.display()));
+            assert_eq!(md, tasks_markdown(&tasks), "{}: collected-tasks.md differs", dir.display());
+            let json = std::fs::read_to_string(dir.join("collected-tasks.json")).unwrap();
+            assert_eq!(json, serde_json::to_string_pretty(&tasks).unwrap(), "{}", dir.display());
+        }
     }
+}
+
+#[test]
+fn per_task_rows_are_each_tasks_values_after_the_last_step_over_the_seeds() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("policies/tuning/seeds-er");
+    let table = collect_tasks(&dir).unwrap();
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(table.groups.len(), 2);
+    for group in &table.groups {
+        assert_eq!((group.finished, group.planned), (3, 3), "{}", group.name);
+        let names: Vec<&str> = group.tasks.iter().map(|t| t.task.as_str()).collect();
+        assert_eq!(names, ["none", "crash:FL", "invert:RL"]);
+        // The group's runs, read directly: the last row of each evaluation matrix and the fall rates.
+        let runs: Vec<serde_json::Value> = plan["cells"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|c| c["group"] == group.name.as_str())
+            .map(|c| {
+                let path = dir.join(c["run"].as_str().unwrap()).join("metrics.json");
+                serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+            })
+            .collect();
+        assert_eq!(runs.len(), 3, "{}", group.name);
+        for (j, row) in group.tasks.iter().enumerate() {
+            let mean = |f: &dyn Fn(&serde_json::Value) -> f64| runs.iter().map(f).sum::<f64>() / 3.0;
+            let last = |m: &serde_json::Value| {
+                m["eval_matrix"]["rows"].as_array().unwrap().last().unwrap()[j].as_f64().unwrap()
+            };
+            let fall = |m: &serde_json::Value| m["command_tracking"]["fall_rate"][j].as_f64().unwrap();
+            assert!((row.measures["performance"].mean - mean(&last)).abs() < 1e-12, "{} {}", group.name, row.task);
+            assert!((row.measures["fall_rate"].mean - mean(&fall)).abs() < 1e-12, "{} {}", group.name, row.task);
+            assert_eq!(row.measures.contains_key("forgetting"), row.task == "crash:FL", "{}", row.task);
+        }
+    }
+    let md = tasks_markdown(&table);
+    assert!(md.contains("| invert:RL |") && md.contains("(3/3 seeds)"), "{md}");
 }
 
 #[test]

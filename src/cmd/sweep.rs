@@ -90,6 +90,10 @@ pub struct StatusArgs {
 pub struct CollectArgs {
     /// The sweep folder.
     pub dir: PathBuf,
+    /// Also per task of each group: performance at the end, forgetting, falls and tracking
+    /// errors over the seeds (DIR/collected-tasks.md, .json).
+    #[arg(long)]
+    pub per_task: bool,
 }
 
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
@@ -172,6 +176,15 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 a.dir.join(sweep::COLLECTED_MD).display(),
                 a.dir.join(sweep::COLLECTED_JSON).display()
             );
+            if a.per_task {
+                let tasks = sweep::collect_tasks_and_write(&a.dir)?;
+                print!("\n{}", sweep::tasks_markdown(&tasks));
+                println!(
+                    "\nwritten to {} and {}",
+                    a.dir.join(sweep::per_task::COLLECTED_TASKS_MD).display(),
+                    a.dir.join(sweep::per_task::COLLECTED_TASKS_JSON).display()
+                );
+            }
             Ok(())
         }
     }

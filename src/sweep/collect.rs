@@ -201,6 +201,18 @@ pub fn rows(table: &Collected) -> (Vec<String>, Vec<Vec<String>>) {
 /// The table as aligned Markdown (readable as it is in a terminal), with a line saying what it shows.
 pub fn markdown(table: &Collected) -> String {
     let (header, rows) = rows(table);
+    let mut out = format!(
+        "Sweep {}: mean over finished seeds [{:.0} % bootstrap interval, {} resamples of the seeds]\n\n",
+        table.sweep_file,
+        table.confidence * 100.0,
+        table.resamples
+    );
+    out.push_str(&aligned_table(&header, &rows));
+    out
+}
+
+/// `header` and `rows` as a Markdown table padded to aligned columns.
+pub fn aligned_table(header: &[String], rows: &[Vec<String>]) -> String {
     let widths: Vec<usize> = (0..header.len())
         .map(|c| rows.iter().map(|r| r[c].chars().count()).chain([header[c].chars().count()]).max().unwrap_or(0))
         .collect();
@@ -208,15 +220,9 @@ pub fn markdown(table: &Collected) -> String {
         let padded: Vec<String> = cells.iter().zip(&widths).map(|(c, w)| format!("{c:<w$}")).collect();
         format!("| {} |\n", padded.join(" | "))
     };
-    let mut out = format!(
-        "Sweep {}: mean over finished seeds [{:.0} % bootstrap interval, {} resamples of the seeds]\n\n",
-        table.sweep_file,
-        table.confidence * 100.0,
-        table.resamples
-    );
-    out.push_str(&line(&header));
+    let mut out = line(header);
     out.push_str(&format!("|{}|\n", widths.iter().map(|w| "-".repeat(w + 2)).collect::<Vec<_>>().join("|")));
-    for r in &rows {
+    for r in rows {
         out.push_str(&line(r));
     }
     out

@@ -11,18 +11,21 @@
 //! - `logs/I.log`: the output of cell I's runs, local or on Slurm;
 //! - `state/I.json`: `sweep local`'s marker of a cell it runs or that failed;
 //! - `sweep.sbatch`, `slurm.json`: the array job script and the submitted jobs;
-//! - `collected.json`, `collected.md`: the collected table.
+//! - `collected.json`, `collected.md`: the collected table;
+//! - `collected-tasks.json`, `collected-tasks.md`: the same groups task by task (`--per-task`).
 //!
 //! One file per part: [`file`](mod@file) (the sweep file), [`plan`](mod@plan) (cells and
 //! `sweep.json`), [`local`] (child processes here), [`slurm`] (array jobs), [`marker`] (what a
 //! local runner says about a cell), [`status`](mod@status) (where every cell stands),
-//! [`bootstrap`] (means and intervals) and [`collect`](mod@collect) (the table).
+//! [`bootstrap`] (means and intervals), [`collect`](mod@collect) (the table) and [`per_task`]
+//! (its groups task by task).
 
 pub mod bootstrap;
 pub mod collect;
 pub mod file;
 pub mod local;
 pub mod marker;
+pub mod per_task;
 pub mod plan;
 pub mod slurm;
 pub mod status;
@@ -31,6 +34,7 @@ pub use bootstrap::{estimate, Estimate};
 pub use collect::{collect, collect_and_write, markdown, Collected, CollectedGroup, RunMeasures, MEASURES};
 pub use file::{SweepFile, SEED_AXIS};
 pub use local::{run_local, LocalOptions, LocalReport};
+pub use per_task::{collect_tasks, collect_tasks_and_write, tasks_markdown, CollectedTasks};
 pub use plan::{check, plan, Cell, Plan};
 pub use slurm::{submit, write_sbatch, SlurmOptions};
 pub use status::{status, status_lines, CellState, CellStatus};
