@@ -4,7 +4,7 @@
 //! from the `metrics.json` it came from. Collecting writes nothing here: the
 //! tables are computed and compared with the committed bytes.
 
-use quadcl::sweep::{collect, collect_tasks, markdown, tasks_markdown};
+use quadcl::sweep::{collect, collect_tasks, contrast, contrast_markdown, markdown, tasks_markdown, Contrast};
 use std::path::{Path, PathBuf};
 
 fn sweep_folders(dir: &Path, found: &mut Vec<PathBuf>) {
@@ -47,6 +47,14 @@ fn every_committed_sweeps_tables_are_what_collect_prints_from_its_run_files() {
             assert_eq!(md, tasks_markdown(&tasks), "{}: collected-tasks.md differs", dir.display());
             let json = std::fs::read_to_string(dir.join("collected-tasks.json")).unwrap();
             assert_eq!(json, serde_json::to_string_pretty(&tasks).unwrap(), "{}", dir.display());
+        }
+        // The paired differences, against the baseline the shipped file names (`--against`).
+        if let Ok(json) = std::fs::read_to_string(dir.join("contrast.json")) {
+            let shipped: Contrast = serde_json::from_str(&json).unwrap();
+            let now = contrast(&table, &shipped.baseline).unwrap();
+            assert_eq!(json, serde_json::to_string_pretty(&now).unwrap(), "{}: contrast.json differs", dir.display());
+            let md = std::fs::read_to_string(dir.join("contrast.md")).unwrap();
+            assert_eq!(md, contrast_markdown(&now), "{}: contrast.md differs", dir.display());
         }
     }
 }

@@ -94,6 +94,10 @@ pub struct CollectArgs {
     /// errors over the seeds (DIR/collected-tasks.md, .json).
     #[arg(long)]
     pub per_task: bool,
+    /// Also every group minus this one, paired by seed, with intervals (DIR/contrast.md, .json):
+    /// a group's name as the table prints it, or the parts that pick it out (`name=ours`).
+    #[arg(long, value_name = "GROUP")]
+    pub against: Option<String>,
 }
 
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
@@ -169,7 +173,12 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             Ok(())
         }
         SweepCommand::Collect(a) => {
-            let table = sweep::collect_and_write(&a.dir)?;
+            let table = sweep::collect(&a.dir)?;
+            if let Some(against) = &a.against {
+                // A baseline no group has fails before anything is written.
+                sweep::contrast::find_group(&table, against)?;
+            }
+            sweep::collect::write_collected(&a.dir, &table)?;
             print!("{}", sweep::markdown(&table));
             println!(
                 "\nwritten to {} and {}",
@@ -183,6 +192,15 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                     "\nwritten to {} and {}",
                     a.dir.join(sweep::per_task::COLLECTED_TASKS_MD).display(),
                     a.dir.join(sweep::per_task::COLLECTED_TASKS_JSON).display()
+                );
+            }
+            if let Some(against) = &a.against {
+                let c = sweep::contrast::contrast_and_write(&a.dir, &table, against)?;
+                print!("\n{}", sweep::contrast_markdown(&c));
+                println!(
+                    "\nwritten to {} and {}",
+                    a.dir.join(sweep::contrast::CONTRAST_MD).display(),
+                    a.dir.join(sweep::contrast::CONTRAST_JSON).display()
                 );
             }
             Ok(())

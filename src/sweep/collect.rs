@@ -168,9 +168,14 @@ pub fn collect(dir: &Path) -> anyhow::Result<Collected> {
 /// Collects `dir` and writes `collected.json` and `collected.md` into it.
 pub fn collect_and_write(dir: &Path) -> anyhow::Result<Collected> {
     let table = collect(dir)?;
-    write_atomic(&dir.join(COLLECTED_JSON), serde_json::to_string_pretty(&table)?.as_bytes())?;
-    write_atomic(&dir.join(COLLECTED_MD), markdown(&table).as_bytes())?;
+    write_collected(dir, &table)?;
     Ok(table)
+}
+
+/// Writes `table` as `collected.json` and `collected.md` into `dir`.
+pub fn write_collected(dir: &Path, table: &Collected) -> anyhow::Result<()> {
+    write_atomic(&dir.join(COLLECTED_JSON), serde_json::to_string_pretty(table)?.as_bytes())?;
+    write_atomic(&dir.join(COLLECTED_MD), markdown(table).as_bytes())
 }
 
 /// `mean [low, high]` to three decimals (one seed: the value alone).

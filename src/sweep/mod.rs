@@ -12,16 +12,18 @@
 //! - `state/I.json`: `sweep local`'s marker of a cell it runs or that failed;
 //! - `sweep.sbatch`, `slurm.json`: the array job script and the submitted jobs;
 //! - `collected.json`, `collected.md`: the collected table;
-//! - `collected-tasks.json`, `collected-tasks.md`: the same groups task by task (`--per-task`).
+//! - `collected-tasks.json`, `collected-tasks.md`: the same groups task by task (`--per-task`);
+//! - `contrast.json`, `contrast.md`: every group minus one, paired by seed (`--against GROUP`).
 //!
 //! One file per part: [`file`](mod@file) (the sweep file), [`plan`](mod@plan) (cells and
 //! `sweep.json`), [`local`] (child processes here), [`slurm`] (array jobs), [`marker`] (what a
 //! local runner says about a cell), [`status`](mod@status) (where every cell stands),
-//! [`bootstrap`] (means and intervals), [`collect`](mod@collect) (the table) and [`per_task`]
-//! (its groups task by task).
+//! [`bootstrap`] (means and intervals), [`collect`](mod@collect) (the table), [`per_task`]
+//! (its groups task by task) and [`contrast`](mod@contrast) (groups against one, paired by seed).
 
 pub mod bootstrap;
 pub mod collect;
+pub mod contrast;
 pub mod file;
 pub mod local;
 pub mod marker;
@@ -32,6 +34,7 @@ pub mod status;
 
 pub use bootstrap::{estimate, Estimate};
 pub use collect::{collect, collect_and_write, markdown, Collected, CollectedGroup, RunMeasures, MEASURES};
+pub use contrast::{contrast, contrast_markdown, Contrast};
 pub use file::{SweepFile, SEED_AXIS};
 pub use local::{run_local, LocalOptions, LocalReport};
 pub use per_task::{collect_tasks, collect_tasks_and_write, tasks_markdown, CollectedTasks};
