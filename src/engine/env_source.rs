@@ -6,7 +6,7 @@
 
 use crate::config::{Config, EnvConfig};
 use anyhow::Context;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The robots shipped under `scenes/`: name, and the run file whose `[env]` sets
 /// its gains, heights and pose (`None`: the `[env]` defaults, which are the A1's).
@@ -17,23 +17,34 @@ pub const SHIPPED_ROBOTS: [(&str, Option<&str>); 3] =
 /// Errors name the file and the problem.
 pub fn env_of_file(path: &Path) -> anyhow::Result<EnvConfig> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading config {}", path.display()))?;
-    let value: toml::Table = toml::from_str(&text).with_context(|| format!("in config {}", path.display()))?;
+    env_of_text(&text, path)
+}
+
+/// [`env_of_file`] of `text`, read from `path` (named in errors).
+fn env_of_text(text: &str, path: &Path) -> anyhow::Result<EnvConfig> {
+    let value: toml::Table = toml::from_str(text).with_context(|| format!("in config {}", path.display()))?;
     let env = if value.contains_key("task") {
-        super::RunConfig::from_toml_str(&text).map(|run| run.config.env)
+        super::RunConfig::from_toml_str(text).map(|run| run.config.env)
     } else {
-        Config::from_toml_str(&text).map(|cfg| cfg.env)
+        Config::from_toml_str(text).map(|cfg| cfg.env)
     };
     env.with_context(|| format!("in config {}", path.display()))
 }
 
 /// The `[env]` settings of `robot`: a shipped robot's name, a `.urdf` file (the
 /// `[env]` defaults with that description), or a run file or training config.
-/// A shipped robot's files are found beside this crate's sources.
+/// A shipped robot's files are read beside this crate's sources, or from the
+/// copies compiled in (`sim::shipped`) where those are absent.
 pub fn env_of_robot(robot: &str) -> anyhow::Result<EnvConfig> {
     if let Some((_, file)) = SHIPPED_ROBOTS.iter().find(|(name, _)| *name == robot) {
         return match file {
             None => Ok(EnvConfig::default()),
-            Some(file) => env_of_file(&crate_file(file)),
+            Some(file) => {
+                let path = crate::sim::shipped::crate_path(file);
+                let text = crate::sim::shipped::read_crate_file(file)
+                    .with_context(|| format!("reading config {}", path.display()))?;
+                env_of_text(&text, &path)
+            }
         };
     }
     let path = Path::new(robot);
@@ -50,11 +61,6 @@ pub fn env_of_robot(robot: &str) -> anyhow::Result<EnvConfig> {
     env_of_file(path)
 }
 
-/// A file of this crate (`scenes/...`) by its path from the crate's root.
-fn crate_file(relative: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -67,7 +73,7 @@ mod tests {
         }
         let err = format!("{:#}", env_of_robot("spot").unwrap_err());
         assert!(err.contains("spot") && err.contains("aliengo"), "{err}");
-        let urdf = env_of_robot(&crate_file("scenes/aliengo.urdf").display().to_string()).unwrap();
+        let urdf = env_of_robot(&crate::sim::shipped::crate_path("scenes/aliengo.urdf").display().to_string()).unwrap();
         assert!(urdf.urdf.ends_with("aliengo.urdf") && urdf.kp == EnvConfig::default().kp);
     }
 }

@@ -3,6 +3,7 @@
 //! - `robot`: URDF parsing and validation; `urdf_text` (the tolerant pass over
 //!   the text), `urdf_mesh` (meshes to primitives), `urdf_merge` (fixed links
 //!   merged), `legs` (trunk, legs and feet found by structure).
+//! - [`shipped`]: the robots' files of `scenes/`, compiled in for use away from the sources.
 //! - `stand`: the robot settled under PD at its default pose (`quadcl robot`).
 //! - `physics`: one robot in one rapier world, implicit PD, state read-back.
 //! - `terrain`: the ground.
@@ -26,6 +27,7 @@ mod physics;
 mod pose;
 pub mod reward;
 mod robot;
+pub mod shipped;
 mod stand;
 mod tasks;
 mod terrain;

@@ -115,20 +115,30 @@ pub struct RobotModel {
 impl RobotModel {
     /// Loads the shipped A1 description, `scenes/a1.urdf`.
     pub fn a1() -> anyhow::Result<Self> {
-        Self::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/a1.urdf"))
+        Self::load_shipped("scenes/a1.urdf", &RobotConfig::default())
     }
 
     /// Loads the description named by `cfg.urdf`: an absolute path, a path
-    /// relative to the working directory, or else relative to the crate root.
-    /// The legs, feet and their names follow `cfg.robot`.
+    /// relative to the working directory, or else relative to the crate root
+    /// (a shipped robot's description compiled in where the sources are absent,
+    /// `sim::shipped`). The legs, feet and their names follow `cfg.robot`.
     pub fn for_config(cfg: &crate::config::EnvConfig) -> anyhow::Result<Self> {
         let path = Path::new(&cfg.urdf);
-        let path = if path.is_absolute() || path.exists() {
-            path.to_path_buf()
-        } else {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
-        };
-        Self::load_with(&path, &cfg.robot)
+        if path.is_absolute() || path.exists() {
+            return Self::load_with(path, &cfg.robot);
+        }
+        if super::shipped::is_shipped(path) {
+            return Self::load_shipped(&cfg.urdf, &cfg.robot);
+        }
+        Self::load_with(&super::shipped::crate_path(&cfg.urdf), &cfg.robot)
+    }
+
+    /// A shipped description by its path from the crate's root (`scenes/a1.urdf`).
+    fn load_shipped(relative: &str, robot: &RobotConfig) -> anyhow::Result<Self> {
+        let path = super::shipped::crate_path(relative);
+        let text = super::shipped::read_crate_file(relative)
+            .with_context(|| format!("reading robot description {}", path.display()))?;
+        Self::parse(&text, &path, robot).with_context(|| format!("in robot description {}", path.display()))
     }
 
     /// Reads and validates a URDF file. Errors name the file and the problem.
