@@ -111,6 +111,7 @@ def main():
     n, t = a.envs, a.steps
     obs_buf, priv_buf = np.zeros((t, n, obs_dim), np.float32), np.zeros((t, n, priv_dim), np.float32)
     act_buf, logp_buf, val_buf = torch.zeros((t, n, act_dim)), torch.zeros((t, n)), torch.zeros((t, n))
+    mean_buf = torch.zeros((t, n, act_dim))  # the rollout policy's means, for the KL of the adaptive rate
     rew_buf, term_buf, trunc_buf = np.zeros((t, n), np.float32), np.zeros((t, n), bool), np.zeros((t, n), bool)
     history, infos = envs.reset(seed=a.seed)
     raw, raw_priv = history[:, -obs_dim:], infos["privileged_obs"]
@@ -128,6 +129,7 @@ def main():
                 value = agent.value(torch.from_numpy(xp))
             history, reward, terminated, truncated, infos = envs.step(action.numpy())
             obs_buf[k], priv_buf[k], act_buf[k], logp_buf[k], val_buf[k] = x, xp, action, logp, value
+            mean_buf[k] = dist.mean
             rew_buf[k], term_buf[k], trunc_buf[k] = np.maximum(reward, 0.0), terminated, truncated
             raw, raw_priv = history[:, -obs_dim:], infos["privileged_obs"]
             if "episode" in infos:
@@ -148,9 +150,9 @@ def main():
         b_obs, b_priv = torch.from_numpy(obs_buf.reshape(t * n, -1)), torch.from_numpy(priv_buf.reshape(t * n, -1))
         b_act, b_logp = act_buf.reshape(t * n, -1), logp_buf.reshape(-1)
         b_adv, b_ret, b_val = adv.reshape(-1), ret.reshape(-1), val_buf.reshape(-1)
-        with torch.no_grad():
-            old = agent.dist(b_obs)
-            old_mean, old_std = old.mean, old.stddev
+        # The rollout's policy: its means as recorded, its std state-independent (one per action).
+        old_mean = mean_buf.reshape(t * n, -1)
+        old_std = agent.log_std.detach().exp().expand_as(old_mean)
         size = -(-t * n // a.minibatches)
         for _ in range(a.epochs):
             for mb in torch.randperm(t * n).split(size):
