@@ -86,8 +86,9 @@ fn every_figure_renders_to_png_and_svg_with_its_title_runs_tasks_and_units() {
         &texts("eval_matrix"),
         &[
             "Evaluation matrix and forgetting",
-            "two-tasks: average performance 0.521, forgetting 0.000",
-            "baseline: average performance 0.521, forgetting 0.000",
+            "two-tasks",
+            "baseline",
+            "average performance 0.521, forgetting 0.000",
             "after 1: crash:FL",
             "after 2: invert:RL",
             "none",

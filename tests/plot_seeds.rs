@@ -51,4 +51,30 @@ fn the_plot_command_names_each_group_of_a_sweep_with_its_seeds() {
     {
         assert!(svg.contains(name), "task_curves.svg does not name {name}");
     }
+    // The summary: a row per group, the collected table's measures as panels.
+    let summary = std::fs::read_to_string(out.path().join("summary.svg")).unwrap();
+    for text in ["ER beta=0.01 name=er (3 seeds)", "ER beta=1.0 name=er (3 seeds)", "average performance", "forgetting"]
+    {
+        assert!(summary.contains(text), "summary.svg does not show {text}");
+    }
+    assert!(!summary.contains("forward transfer"), "no run of this sweep has a forward transfer");
+}
+
+#[test]
+fn a_groups_summary_is_its_collected_rows_mean_interval_and_seeds() {
+    let groups = load_sweep(&sweep()).unwrap();
+    let table = quadcl::sweep::collect(&sweep()).unwrap();
+    assert_eq!(groups.len(), table.groups.len());
+    for (drawn, row) in groups.iter().zip(&table.groups) {
+        let over = drawn.over_seeds.as_ref().unwrap();
+        assert_eq!((over.group.as_str(), over.seeds), (row.name.as_str(), row.finished));
+        for m in &over.measures {
+            assert_eq!(m.estimate, row.measures[&m.key], "{} {}", row.name, m.key);
+            let seeds: Vec<f64> = row.cells.iter().filter_map(|c| c.measures.get(&m.key).copied()).collect();
+            assert_eq!(m.values, seeds, "{} {}", row.name, m.key);
+        }
+        let keys: Vec<&str> = over.measures.iter().map(|m| m.key.as_str()).collect();
+        let table_keys: Vec<&str> = row.measures.keys().map(String::as_str).collect();
+        assert_eq!(keys.len(), table_keys.len(), "{keys:?} {table_keys:?}");
+    }
 }

@@ -181,6 +181,31 @@ pub struct RunData {
     pub steps: Vec<StepCurves>,
     /// `R[i][j]` after each step; none for a single training (`quadcl train`).
     pub eval_matrix: Option<EvalMatrix>,
+    /// For a sweep's group drawn across seeds: its collected measures (figure `summary`).
+    pub over_seeds: Option<OverSeeds>,
+}
+
+/// A sweep group's measures over its finished seeds, as `sweep collect` has them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OverSeeds {
+    /// The group's name in the sweep (`lambda=0.25`), without the seeds' note.
+    pub group: String,
+    /// Finished seeds it is over.
+    pub seeds: usize,
+    /// The measures the runs have, in the collected table's order.
+    pub measures: Vec<SeedMeasure>,
+}
+
+/// One measure of a group over its seeds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeedMeasure {
+    /// `sweep::MEASURES`' key and heading.
+    pub key: String,
+    pub heading: String,
+    /// Each finished seed's value, in the plan's order.
+    pub values: Vec<f64>,
+    /// Their mean and 90 % bootstrap interval (`sweep::estimate`).
+    pub estimate: crate::sweep::Estimate,
 }
 
 impl RunData {
@@ -231,6 +256,7 @@ mod tests {
             source: "x".into(),
             steps: vec![step(5), step(3), step(7)],
             eval_matrix: None,
+            over_seeds: None,
         };
         assert_eq!(run.step_offsets(), vec![0, 5, 8]);
     }

@@ -20,7 +20,7 @@ const SCALE_HEIGHT: u32 = 64;
 const PER_ROW: usize = 3;
 const CELL_HEIGHT: i32 = 34;
 const PAD: i32 = 16;
-const BLOCK_TITLE: i32 = 34;
+const BLOCK_TITLE: i32 = 52;
 const X_DESC: i32 = 24;
 const COLUMN_NAMES: i32 = 28;
 const GAP: i32 = 10;
@@ -43,6 +43,8 @@ fn row_label(m: &EvalMatrix, i: usize) -> String {
 struct Block {
     label_width: i32,
     cell_width: i32,
+    /// The widest run label (the block's first title line, which must not run into the next block).
+    title_width: i32,
     columns: usize,
     rows: usize,
 }
@@ -50,8 +52,15 @@ struct Block {
 impl Block {
     fn of(blocks: &[(&RunData, &EvalMatrix)]) -> Self {
         let width = |s: &str, size: f64| text_width(size, s) as i32;
-        let mut b = Block { label_width: width(ROW_HEADER, TICK_SIZE) + 16, cell_width: 96, columns: 1, rows: 1 };
-        for (_, m) in blocks {
+        let mut b = Block {
+            label_width: width(ROW_HEADER, TICK_SIZE) + 16,
+            cell_width: 96,
+            title_width: 0,
+            columns: 1,
+            rows: 1,
+        };
+        for (run, m) in blocks {
+            b.title_width = b.title_width.max(width(&run.label, LABEL_SIZE) + 16);
             b.columns = b.columns.max(m.tasks.len());
             b.rows = b.rows.max(m.rows.len());
             for i in 0..m.rows.len() {
@@ -65,7 +74,7 @@ impl Block {
     }
 
     fn width(&self) -> u32 {
-        (2 * PAD + self.label_width + self.columns as i32 * self.cell_width) as u32
+        (2 * PAD + (self.label_width + self.columns as i32 * self.cell_width).max(self.title_width)) as u32
     }
 
     fn height(&self) -> u32 {
@@ -137,13 +146,11 @@ where
     let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
     let left = text(TICK_SIZE).pos(Pos::new(HPos::Left, VPos::Center));
     let centre = text(TICK_SIZE).pos(Pos::new(HPos::Center, VPos::Center));
-    let summary = format!(
-        "{}: average performance {}, forgetting {}",
-        run.label,
-        show(m.average_performance()),
-        show(m.forgetting())
-    );
-    area.draw_text(&summary, &text(LABEL_SIZE).pos(Pos::new(HPos::Left, VPos::Center)), (PAD, BLOCK_TITLE / 2 + 4))?;
+    // Two lines: the run's label (a sweep group's can be long), then its summary.
+    let summary = format!("average performance {}, forgetting {}", show(m.average_performance()), show(m.forgetting()));
+    let title = text(LABEL_SIZE).pos(Pos::new(HPos::Left, VPos::Center));
+    area.draw_text(&run.label, &title, (PAD, 14))?;
+    area.draw_text(&summary, &text(TICK_SIZE).pos(Pos::new(HPos::Left, VPos::Center)), (PAD, 36))?;
     let x_cells = PAD + b.label_width;
     let cells_width = m.tasks.len() as i32 * b.cell_width;
     let mut y = BLOCK_TITLE;

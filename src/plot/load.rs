@@ -119,7 +119,13 @@ fn read_run(file: &Path) -> anyhow::Result<RunData> {
             }
         })
         .collect();
-    Ok(RunData { label: String::new(), source: file.to_path_buf(), steps, eval_matrix: Some(parsed.eval_matrix) })
+    Ok(RunData {
+        label: String::new(),
+        source: file.to_path_buf(),
+        steps,
+        eval_matrix: Some(parsed.eval_matrix),
+        over_seeds: None,
+    })
 }
 
 /// A matrix the figures can index: a row per trained step, an entry per task in each row.
@@ -174,7 +180,13 @@ fn read_train(file: &Path) -> anyhow::Result<RunData> {
         );
         step.iterations = step.iterations.max(iteration as usize);
     }
-    Ok(RunData { label: String::new(), source: file.to_path_buf(), steps: vec![step], eval_matrix: None })
+    Ok(RunData {
+        label: String::new(),
+        source: file.to_path_buf(),
+        steps: vec![step],
+        eval_matrix: None,
+        over_seeds: None,
+    })
 }
 
 /// The task a `quadcl train` folder trained (its `summary.json`), or `train` when unknown.

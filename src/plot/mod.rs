@@ -8,7 +8,9 @@
 //!   each task's forgetting `R[j][j] - R[N][j]` (METHOD.md 4) in a row under it;
 //! - `plasticity`: the `plasticity/FAMILY/MEMBER` measures of the curves, one panel per family
 //!   (a line per network or layer for one run, each run's mean over them for several), when a
-//!   run recorded any.
+//!   run recorded any;
+//! - `summary`: for sweep folders, the collected table drawn: per measure a row per group, its
+//!   mean over the seeds, the 90 % interval and each seed.
 //!
 //! One function per figure takes the data ([`RunData`], read by [`load_run`] from a run's
 //! `metrics.json` or a training's `metrics.jsonl`) and a plotters drawing area; [`Figure`]
@@ -33,9 +35,10 @@ mod render;
 mod seeds;
 mod sequence;
 mod style;
+mod summary;
 mod task_curves;
 
-pub use data::{plasticity_parts, Curve, Measure, RunData, StepCurves};
+pub use data::{plasticity_parts, Curve, Measure, OverSeeds, RunData, SeedMeasure, StepCurves};
 pub use eval_matrix::{draw_eval_matrix, eval_matrix_size};
 pub use legend::LegendEntry;
 pub use load::{load_run, RUN_METRICS, TRAIN_METRICS};
@@ -44,6 +47,7 @@ pub use plasticity::{draw_plasticity, plasticity_size};
 pub use render::{render_png, render_svg, write_figures};
 pub use seeds::{curve_across_seeds, is_sweep, load_sweep, runs_across_seeds};
 pub use sequence::{draw_sequence, sequence_size};
+pub use summary::{draw_summary, summary_size};
 pub use task_curves::{draw_task_curves, task_curves_size};
 
 use plotters::coord::Shift;
@@ -73,10 +77,12 @@ pub enum Figure {
     Sequence,
     EvalMatrix,
     Plasticity,
+    Summary,
 }
 
 impl Figure {
-    pub const ALL: [Figure; 4] = [Figure::TaskCurves, Figure::Sequence, Figure::EvalMatrix, Figure::Plasticity];
+    pub const ALL: [Figure; 5] =
+        [Figure::TaskCurves, Figure::Sequence, Figure::EvalMatrix, Figure::Plasticity, Figure::Summary];
 
     /// The file name without its extension.
     pub fn file_stem(self) -> &'static str {
@@ -85,6 +91,7 @@ impl Figure {
             Figure::Sequence => "sequence",
             Figure::EvalMatrix => "eval_matrix",
             Figure::Plasticity => "plasticity",
+            Figure::Summary => "summary",
         }
     }
 
@@ -94,6 +101,7 @@ impl Figure {
             Figure::TaskCurves | Figure::Sequence => !runs.is_empty(),
             Figure::EvalMatrix => runs.iter().any(|r| r.eval_matrix.as_ref().is_some_and(|m| !m.rows.is_empty())),
             Figure::Plasticity => runs.iter().any(RunData::has_plasticity),
+            Figure::Summary => runs.iter().any(|r| r.over_seeds.is_some()),
         }
     }
 
@@ -104,6 +112,7 @@ impl Figure {
             Figure::Sequence => sequence_size(runs),
             Figure::EvalMatrix => eval_matrix_size(runs),
             Figure::Plasticity => plasticity_size(runs),
+            Figure::Summary => summary_size(runs),
         }
     }
 
@@ -123,6 +132,7 @@ impl Figure {
             Figure::Sequence => draw_sequence(area, runs, options),
             Figure::EvalMatrix => draw_eval_matrix(area, runs),
             Figure::Plasticity => draw_plasticity(area, runs, options),
+            Figure::Summary => draw_summary(area, runs),
         }
     }
 }

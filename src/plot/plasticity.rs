@@ -185,6 +185,7 @@ mod tests {
                 step(&["plasticity/dormant/actor"], 2),
             ],
             eval_matrix: None,
+            over_seeds: None,
         };
         assert_eq!(families(std::slice::from_ref(&run)), ["dormant", "zeta"]);
         let dormant = members(&run, "dormant", &PlotOptions::default());

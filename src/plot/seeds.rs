@@ -4,10 +4,10 @@
 //! evaluation matrix the mean of theirs entry by entry. `quadcl plot` makes one of these per
 //! group of a sweep folder (`sweep::collect`'s groups, finished cells only).
 
-use super::data::{Curve, Measure, RunData, StepCurves};
+use super::data::{Curve, Measure, OverSeeds, RunData, SeedMeasure, StepCurves};
 use super::load::load_run;
 use crate::cl::EvalMatrix;
-use crate::sweep::{Plan, RunMeasures};
+use crate::sweep::{estimate, Plan, RunMeasures, MEASURES};
 use anyhow::{ensure, Context};
 use std::path::Path;
 
@@ -64,6 +64,7 @@ pub fn runs_across_seeds(label: &str, runs: &[RunData]) -> anyhow::Result<RunDat
         source: first.source.clone(),
         steps,
         eval_matrix: matrices.and_then(|m| mean_matrix(&m)),
+        over_seeds: None,
     })
 }
 
@@ -102,11 +103,12 @@ pub fn load_sweep(dir: &Path) -> anyhow::Result<Vec<RunData>> {
     let plan = Plan::load(dir)?;
     let mut out = Vec::new();
     for (name, indices) in plan.groups() {
-        let mut runs = Vec::new();
+        let (mut runs, mut measures) = (Vec::new(), Vec::new());
         for i in indices {
             let run = dir.join(&plan.cells[i].run);
-            if RunMeasures::load(&run)?.is_some_and(|m| m.finished()) {
+            if let Some(m) = RunMeasures::load(&run)?.filter(|m| m.finished()) {
                 runs.push(load_run(&run, None)?);
+                measures.push(m);
             }
         }
         if runs.is_empty() {
@@ -114,7 +116,9 @@ pub fn load_sweep(dir: &Path) -> anyhow::Result<Vec<RunData>> {
         }
         let seeds =
             if runs.len() == 1 { "1 seed".to_string() } else { format!("mean of {} seeds, range shaded", runs.len()) };
-        out.push(runs_across_seeds(&format!("{name} ({seeds})"), &runs)?);
+        let mut group = runs_across_seeds(&format!("{name} ({seeds})"), &runs)?;
+        group.over_seeds = Some(over_seeds(&name, &measures));
+        out.push(group);
     }
     ensure!(
         !out.is_empty(),
@@ -122,6 +126,23 @@ pub fn load_sweep(dir: &Path) -> anyhow::Result<Vec<RunData>> {
         dir.display()
     );
     Ok(out)
+}
+
+/// The collected table's measures of one group's finished runs (those all of them lack left out).
+fn over_seeds(group: &str, runs: &[RunMeasures]) -> OverSeeds {
+    let measures = MEASURES
+        .iter()
+        .filter_map(|(key, heading)| {
+            let values: Vec<f64> = runs.iter().filter_map(|r| r.measure(key)).collect();
+            Some(SeedMeasure {
+                key: key.to_string(),
+                heading: heading.to_string(),
+                estimate: estimate(&values)?,
+                values,
+            })
+        })
+        .collect();
+    OverSeeds { group: group.to_string(), seeds: runs.len(), measures }
 }
 
 #[cfg(test)]
@@ -159,6 +180,7 @@ mod tests {
             source: source.into(),
             steps: vec![StepCurves { task: task.into(), iterations: 1, ..Default::default() }],
             eval_matrix: None,
+            over_seeds: None,
         };
         let err = runs_across_seeds("g", &[run("crash:FL", "r1"), run("noise:FR", "r2")]).unwrap_err().to_string();
         assert!(err.contains("r1") && err.contains("r2") && err.contains("noise:FR"), "{err}");

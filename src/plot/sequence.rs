@@ -96,7 +96,7 @@ mod tests {
     fn run(steps: &[(&str, usize)]) -> RunData {
         let steps =
             steps.iter().map(|(task, n)| StepCurves { task: task.to_string(), iterations: *n, ..Default::default() });
-        RunData { label: "r".into(), source: "x".into(), steps: steps.collect(), eval_matrix: None }
+        RunData { label: "r".into(), source: "x".into(), steps: steps.collect(), eval_matrix: None, over_seeds: None }
     }
 
     #[test]
