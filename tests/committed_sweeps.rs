@@ -4,6 +4,7 @@
 //! from the `metrics.json` it came from. Collecting writes nothing here: the
 //! tables are computed and compared with the committed bytes.
 
+use quadcl::sweep::contrast::contrast_across;
 use quadcl::sweep::{collect, collect_tasks, contrast, contrast_markdown, markdown, tasks_markdown, Contrast};
 use std::path::{Path, PathBuf};
 
@@ -27,6 +28,15 @@ fn every_committed_sweeps_tables_are_what_collect_prints_from_its_run_files() {
     sweep_folders(&root, &mut folders);
     assert!(folders.len() >= 10, "only {} committed sweeps found under {}", folders.len(), root.display());
     for dir in folders {
+        check_folder(&dir);
+    }
+}
+
+/// The tables in `dir` are what `quadcl sweep collect` computes from its run files; the number
+/// of contrast files checked.
+fn check_folder(dir: &Path) -> usize {
+    let dir = dir.to_path_buf();
+    {
         let table = collect(&dir).unwrap_or_else(|e| panic!("{}: {e:#}", dir.display()));
         let finished: usize = table.groups.iter().map(|g| g.finished).sum();
         assert!(finished > 0, "{}: a committed sweep with no finished cell", dir.display());
@@ -48,15 +58,62 @@ fn every_committed_sweeps_tables_are_what_collect_prints_from_its_run_files() {
             let json = std::fs::read_to_string(dir.join("collected-tasks.json")).unwrap();
             assert_eq!(json, serde_json::to_string_pretty(&tasks).unwrap(), "{}", dir.display());
         }
-        // The paired differences, against the baseline the shipped file names (`--against`).
-        if let Ok(json) = std::fs::read_to_string(dir.join("contrast.json")) {
+        // The paired differences, against the baseline each shipped file names (`--against`,
+        // in this folder or another: `contrast-vs-OTHER.json`).
+        let mut contrasts: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| {
+                let name = p.file_name().unwrap().to_string_lossy();
+                name.starts_with("contrast") && name.ends_with(".json")
+            })
+            .collect();
+        contrasts.sort();
+        let checked = contrasts.len();
+        for file in contrasts {
+            let json = std::fs::read_to_string(&file).unwrap();
             let shipped: Contrast = serde_json::from_str(&json).unwrap();
-            let now = contrast(&table, &shipped.baseline).unwrap();
-            assert_eq!(json, serde_json::to_string_pretty(&now).unwrap(), "{}: contrast.json differs", dir.display());
-            let md = std::fs::read_to_string(dir.join("contrast.md")).unwrap();
-            assert_eq!(md, contrast_markdown(&now), "{}: contrast.md differs", dir.display());
+            let now = match &shipped.baseline_sweep {
+                None => contrast(&table, &shipped.baseline).unwrap(),
+                Some(other) => {
+                    let other_table = collect(&dir.join(other)).unwrap();
+                    contrast_across(&table, &other_table, other, &shipped.baseline).unwrap()
+                }
+            };
+            assert_eq!(json, serde_json::to_string_pretty(&now).unwrap(), "{} differs", file.display());
+            let md = std::fs::read_to_string(file.with_extension("md")).unwrap();
+            assert_eq!(md, contrast_markdown(&now), "{} differs", file.with_extension("md").display());
         }
+        checked
     }
+}
+
+#[test]
+fn a_contrast_against_another_sweeps_group_is_checked_from_both_folders() {
+    let policies = Path::new(env!("CARGO_MANIFEST_DIR")).join("policies/tuning");
+    let tmp = tempfile::tempdir().unwrap();
+    for name in ["seeds-er", "seeds-rwalk"] {
+        copy_dir(&policies.join(name), &tmp.path().join(name));
+    }
+    let er = tmp.path().join("seeds-er");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_quadcl"))
+        .args(["sweep", "collect", er.to_str().unwrap(), "--against", "lambda=1.0", "--against-in"])
+        .arg(tmp.path().join("seeds-rwalk"))
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(er.join("contrast-vs-seeds-rwalk.json")).unwrap()).unwrap();
+    assert_eq!(written["baseline_sweep"], "../seeds-rwalk");
+    assert_eq!(check_folder(&er), 2, "contrast.json and contrast-vs-seeds-rwalk.json");
+    // The other folder's run files changed: the shipped table no longer matches.
+    let metrics = tmp.path().join("seeds-rwalk/runs/3/metrics.json");
+    let text = std::fs::read_to_string(&metrics).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["average_performance"] = serde_json::json!(json["average_performance"].as_f64().unwrap() + 0.2);
+    std::fs::write(&metrics, serde_json::to_string(&json).unwrap()).unwrap();
+    let changed = std::panic::catch_unwind(|| check_folder(&er));
+    assert!(changed.is_err(), "a changed baseline run left the cross-sweep contrast as shipped");
 }
 
 #[test]

@@ -98,6 +98,10 @@ pub struct CollectArgs {
     /// a group's name as the table prints it, or the parts that pick it out (`name=ours`).
     #[arg(long, value_name = "GROUP")]
     pub against: Option<String>,
+    /// The sweep folder that holds --against's group, when it is another one run at the same
+    /// seeds (DIR/contrast-vs-OTHER.md, .json).
+    #[arg(long, value_name = "OTHER", requires = "against")]
+    pub against_in: Option<PathBuf>,
 }
 
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
@@ -174,10 +178,16 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         }
         SweepCommand::Collect(a) => {
             let table = sweep::collect(&a.dir)?;
-            if let Some(against) = &a.against {
-                // A baseline no group has fails before anything is written.
-                sweep::contrast::find_group(&table, against)?;
-            }
+            // A baseline no group has fails before anything is written.
+            let contrast = match (&a.against, &a.against_in) {
+                (Some(against), None) => Some(sweep::contrast(&table, against)?),
+                (Some(against), Some(other)) => {
+                    let other_table = sweep::collect(other)?;
+                    let relative = relative_path(&a.dir, other)?;
+                    Some(sweep::contrast::contrast_across(&table, &other_table, &relative, against)?)
+                }
+                _ => None,
+            };
             sweep::collect::write_collected(&a.dir, &table)?;
             print!("{}", sweep::markdown(&table));
             println!(
@@ -194,16 +204,23 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                     a.dir.join(sweep::per_task::COLLECTED_TASKS_JSON).display()
                 );
             }
-            if let Some(against) = &a.against {
-                let c = sweep::contrast::contrast_and_write(&a.dir, &table, against)?;
+            if let Some(c) = contrast {
+                let (md, json) = sweep::contrast::write_contrast(&a.dir, &c)?;
                 print!("\n{}", sweep::contrast_markdown(&c));
-                println!(
-                    "\nwritten to {} and {}",
-                    a.dir.join(sweep::contrast::CONTRAST_MD).display(),
-                    a.dir.join(sweep::contrast::CONTRAST_JSON).display()
-                );
+                println!("\nwritten to {} and {}", md.display(), json.display());
             }
             Ok(())
         }
     }
+}
+
+/// `to` relative to the folder `from` (both must exist), as `../fig5-selection`.
+fn relative_path(from: &std::path::Path, to: &std::path::Path) -> anyhow::Result<String> {
+    use anyhow::Context;
+    let canon = |p: &std::path::Path| p.canonicalize().with_context(|| format!("{}: no such folder", p.display()));
+    let (from, to) = (canon(from)?, canon(to)?);
+    let common = from.components().zip(to.components()).take_while(|(a, b)| a == b).count();
+    let mut parts: Vec<String> = from.components().skip(common).map(|_| "..".to_string()).collect();
+    parts.extend(to.components().skip(common).map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    Ok(if parts.is_empty() { ".".into() } else { parts.join("/") })
 }

@@ -6,14 +6,20 @@
 //! alike (a hard task draw, a lucky start), so a difference can be clear where
 //! the two groups' own intervals overlap. Written as `DIR/contrast.md` and
 //! `.json`; a finding's verdict reads its interval (does it exclude zero?).
+//!
+//! The baseline may be a group of another sweep folder (`--against-in OTHER`) run
+//! at the same seeds, when one figure's variants live in two sweeps (fig8's
+//! re-init with entropy is fig5's split rule): then every group of DIR is set
+//! against it, and the files are `contrast-vs-OTHER.md` and `.json`, with OTHER's
+//! path relative to DIR recorded so the table can be computed again.
 
 use super::bootstrap::{estimate, Estimate, CONFIDENCE, RESAMPLES};
-use super::collect::{aligned_table, estimate_text, Collected};
+use super::collect::{aligned_table, estimate_text, Collected, CollectedGroup};
 use crate::util::write_atomic;
 use anyhow::bail;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// `contrast.md`, beside `collected.md`.
 pub const CONTRAST_MD: &str = "contrast.md";
@@ -36,6 +42,9 @@ pub struct Contrast {
     pub sweep_file: String,
     /// The baseline group's name.
     pub baseline: String,
+    /// The sweep folder holding the baseline, relative to this one, when it is another.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub baseline_sweep: Option<String>,
     pub confidence: f64,
     pub resamples: usize,
     pub measures: Vec<(String, String)>,
@@ -66,12 +75,29 @@ pub fn find_group<'a>(table: &'a Collected, against: &str) -> anyhow::Result<&'a
 
 /// Every group of `table` against the group `against` names (see [`find_group`]).
 pub fn contrast(table: &Collected, against: &str) -> anyhow::Result<Contrast> {
-    let baseline_name = find_group(table, against)?.to_string();
+    let baseline_name = find_group(table, against)?;
     let baseline = table.groups.iter().find(|g| g.name == baseline_name).expect("found above");
+    Ok(contrast_with(table, baseline, None))
+}
+
+/// Every group of `table` against the group `against` names in `other`, the table of the
+/// sweep folder `other_path` (relative to `table`'s, as recorded).
+pub fn contrast_across(
+    table: &Collected,
+    other: &Collected,
+    other_path: &str,
+    against: &str,
+) -> anyhow::Result<Contrast> {
+    let baseline_name = find_group(other, against)?;
+    let baseline = other.groups.iter().find(|g| g.name == baseline_name).expect("found above");
+    Ok(contrast_with(table, baseline, Some(other_path.to_string())))
+}
+
+fn contrast_with(table: &Collected, baseline: &CollectedGroup, baseline_sweep: Option<String>) -> Contrast {
     let rows = table
         .groups
         .iter()
-        .filter(|g| g.name != baseline_name)
+        .filter(|g| baseline_sweep.is_some() || g.name != baseline.name)
         .map(|g| {
             // Pairs of finished cells with the same seed (a sweep without a seed axis pairs none).
             let pairs: Vec<_> = g
@@ -99,22 +125,36 @@ pub fn contrast(table: &Collected, against: &str) -> anyhow::Result<Contrast> {
             }
         })
         .collect();
-    Ok(Contrast {
+    Contrast {
         sweep_file: table.sweep_file.clone(),
-        baseline: baseline_name,
+        baseline: baseline.name.clone(),
+        baseline_sweep,
         confidence: CONFIDENCE,
         resamples: RESAMPLES,
         measures: table.measures.clone(),
         rows,
-    })
+    }
 }
 
-/// Contrasts `table` against `against` and writes `contrast.json` and `.md` into `dir`.
-pub fn contrast_and_write(dir: &Path, table: &Collected, against: &str) -> anyhow::Result<Contrast> {
-    let c = contrast(table, against)?;
-    write_atomic(&dir.join(CONTRAST_JSON), serde_json::to_string_pretty(&c)?.as_bytes())?;
-    write_atomic(&dir.join(CONTRAST_MD), contrast_markdown(&c).as_bytes())?;
-    Ok(c)
+/// The files a contrast is written to in its folder: `contrast.md`/`.json`, or
+/// `contrast-vs-OTHER.md`/`.json` against another sweep folder OTHER.
+pub fn contrast_files(c: &Contrast) -> (String, String) {
+    match &c.baseline_sweep {
+        None => (CONTRAST_MD.to_string(), CONTRAST_JSON.to_string()),
+        Some(other) => {
+            let name = Path::new(other).file_name().map_or("other".into(), |n| n.to_string_lossy().into_owned());
+            (format!("contrast-vs-{name}.md"), format!("contrast-vs-{name}.json"))
+        }
+    }
+}
+
+/// Writes `c` into the sweep folder `dir` (see [`contrast_files`]); returns the two paths.
+pub fn write_contrast(dir: &Path, c: &Contrast) -> anyhow::Result<(PathBuf, PathBuf)> {
+    let (md, json) = contrast_files(c);
+    let (md, json) = (dir.join(md), dir.join(json));
+    write_atomic(&json, serde_json::to_string_pretty(c)?.as_bytes())?;
+    write_atomic(&md, contrast_markdown(c).as_bytes())?;
+    Ok((md, json))
 }
 
 /// The contrast as aligned Markdown, with a line saying what it shows.
@@ -133,7 +173,10 @@ pub fn contrast_markdown(c: &Contrast) -> String {
     format!(
         "Sweep {}: each group minus {}, paired by seed: mean difference [{:.0} % bootstrap interval, {} resamples of the seeds]\n\n{}",
         c.sweep_file,
-        c.baseline,
+        match &c.baseline_sweep {
+            None => c.baseline.clone(),
+            Some(other) => format!("{} of the sweep {other}", c.baseline),
+        },
         c.confidence * 100.0,
         c.resamples,
         aligned_table(&header, &rows)
@@ -203,6 +246,23 @@ mod tests {
         ]);
         let d = contrast(&t, "a").unwrap().rows[0].differences["forgetting"];
         assert!((d.low - 0.05).abs() < 1e-9 && (d.high - 0.05).abs() < 1e-9, "{d:?}");
+    }
+
+    #[test]
+    fn against_another_sweeps_group_every_group_is_set_against_it_and_written_beside() {
+        let here = table(vec![group("reinit=both", &[(1, Some(0.2)), (2, Some(0.3)), (3, Some(0.1))])]);
+        let other = table(vec![
+            group("lambda=0.25", &[(1, Some(0.1)), (2, Some(0.1)), (3, Some(0.1))]),
+            group("lambda=free", &[(1, Some(0.9)), (2, Some(0.9)), (3, Some(0.9))]),
+        ]);
+        let c = contrast_across(&here, &other, "../fig5-selection", "lambda=0.25").unwrap();
+        assert_eq!(c.rows.len(), 1);
+        assert!((c.rows[0].differences["forgetting"].mean - 0.1).abs() < 1e-12);
+        assert_eq!(
+            contrast_files(&c),
+            ("contrast-vs-fig5-selection.md".into(), "contrast-vs-fig5-selection.json".into())
+        );
+        assert!(contrast_markdown(&c).contains("minus lambda=0.25 of the sweep ../fig5-selection"));
     }
 
     #[test]

@@ -13,7 +13,8 @@
 //! - `sweep.sbatch`, `slurm.json`: the array job script and the submitted jobs;
 //! - `collected.json`, `collected.md`: the collected table;
 //! - `collected-tasks.json`, `collected-tasks.md`: the same groups task by task (`--per-task`);
-//! - `contrast.json`, `contrast.md`: every group minus one, paired by seed (`--against GROUP`).
+//! - `contrast.json`, `contrast.md`: every group minus one, paired by seed (`--against GROUP`),
+//!   and `contrast-vs-OTHER.*` against a group of another sweep folder (`--against-in OTHER`).
 //!
 //! One file per part: [`file`](mod@file) (the sweep file), [`plan`](mod@plan) (cells and
 //! `sweep.json`), [`local`] (child processes here), [`slurm`] (array jobs), [`marker`] (what a
