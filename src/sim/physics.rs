@@ -260,6 +260,10 @@ impl RobotSim {
         }
         mb.forward_kinematics(&self.world.bodies, false);
         mb.update_rigid_bodies(&mut self.world.bodies, true);
+        // Nothing moves the robot between steps from here on (a reset builds a new world;
+        // pushes change velocities only), so the step-start kinematics pass would recompute
+        // the last step's poses and Jacobians bit for bit (vendor/rapier3d/PATCH.md, item 7).
+        mb.set_step_start_kinematics(false);
     }
 
     /// Sets the 12 PD position targets (rad) for the following physics steps.

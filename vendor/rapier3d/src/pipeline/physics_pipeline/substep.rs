@@ -435,8 +435,12 @@ impl PhysicsPipeline {
 
         // TODO: do this only on user-change.
         // TODO: do we want some kind of automatic inverse kinematics?
+        // A multibody may opt out (`Multibody::set_step_start_kinematics(false)`): the
+        // forward kinematics its last step ended with then stands.
         for multibody in &mut multibody_joints.multibodies {
-            multibody.1.forward_kinematics(bodies, true);
+            if multibody.1.step_start_kinematics() || !multibody.1.kinematics_from_last_step {
+                multibody.1.forward_kinematics(bodies, true);
+            }
             multibody
                 .1
                 .update_rigid_bodies_internal(bodies, true, false, false);

@@ -42,4 +42,6 @@ mod unit_multibody_joint;
 #[cfg(all(test, feature = "alloc"))]
 mod multibody_explicit_coriolis_tests;
 #[cfg(all(test, feature = "alloc"))]
+mod multibody_step_start_kinematics_tests;
+#[cfg(all(test, feature = "alloc"))]
 mod multibody_regression_tests;

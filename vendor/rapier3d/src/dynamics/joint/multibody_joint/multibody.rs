@@ -106,6 +106,11 @@ fn implicit_coriolis_default() -> bool {
     true
 }
 
+#[cfg(feature = "serde-serialize")]
+fn step_start_kinematics_default() -> bool {
+    true
+}
+
 /// Sets `dst` to `len` zeros, reallocating only when its length differs.
 fn resize_zeroed(dst: &mut DVector, len: usize) {
     if dst.len() == len {
@@ -206,6 +211,17 @@ pub struct Multibody {
         serde(default = "implicit_coriolis_default")
     )]
     implicit_coriolis: bool,
+    /// Whether a step re-runs forward kinematics at its start (see
+    /// [`Multibody::set_step_start_kinematics`]).
+    #[cfg_attr(
+        feature = "serde-serialize",
+        serde(default = "step_start_kinematics_default")
+    )]
+    step_start_kinematics: bool,
+    /// Whether the link poses and body Jacobians are those the last step's position
+    /// integration ended with (set by the solver, cleared on creation and deserialization).
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    pub(crate) kinematics_from_last_step: bool,
     /// Holonomic couplings between two of this multibody's generalized
     /// coordinates (`q2 = coeff·q1 + offset`), e.g. MuJoCo's
     /// `<equality><joint>`. Resolved as velocity constraints each step.
@@ -263,6 +279,8 @@ impl Multibody {
             root_is_dynamic: false,
             self_contacts_enabled,
             implicit_coriolis: true,
+            step_start_kinematics: true,
+            kinematics_from_last_step: false,
             couplings: Vec::new(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
@@ -297,6 +315,7 @@ impl Multibody {
                 link2mb[i] = result.len();
                 let mut mb = Multibody::with_self_contacts(self.self_contacts_enabled);
                 mb.implicit_coriolis = self.implicit_coriolis;
+                mb.step_start_kinematics = self.step_start_kinematics;
                 result.push(mb);
             } else {
                 link2mb[i] = link2mb[link.parent_internal_id]
@@ -478,6 +497,29 @@ impl Multibody {
     ///   per step; less damping of fast spins at large time steps.
     pub fn set_implicit_coriolis(&mut self, implicit: bool) {
         self.implicit_coriolis = implicit;
+    }
+
+    /// Whether each step re-runs this multibody's forward kinematics at its start (the default).
+    pub fn step_start_kinematics(&self) -> bool {
+        self.step_start_kinematics
+    }
+
+    /// Chooses whether each step re-runs this multibody's forward kinematics at its start.
+    ///
+    /// Every step ends with forward kinematics from the integrated coordinates. By default the
+    /// next step runs it again at its start, with the root's pose read from its rigid-body, in
+    /// case the user moved the multibody in between. Where nothing moved, that second pass
+    /// recomputes the same link poses and body Jacobians, bit for bit.
+    ///
+    /// - `true` (the default): the pass runs at every step.
+    /// - `false`: it is skipped whenever the last step ended with this multibody's forward
+    ///   kinematics (a new multibody's first step still runs it). After changing a joint's coordinates or frames, the root
+    ///   rigid-body's pose or its body type, call [`Self::forward_kinematics`] and
+    ///   [`Self::update_rigid_bodies`] before the next step. Changing velocities, springs,
+    ///   motors, damping or limits needs nothing. The rigid-bodies' world mass properties are
+    ///   still updated at the step's start.
+    pub fn set_step_start_kinematics(&mut self, enabled: bool) {
+        self.step_start_kinematics = enabled;
     }
 
     /// The factorized augmented mass matrix of this multibody (solve against it with

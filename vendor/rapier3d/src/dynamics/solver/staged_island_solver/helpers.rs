@@ -140,6 +140,7 @@ impl VelocitySolver {
             multibody.velocities.copy_from(&solver_vels);
             multibody.integrate(params.dt);
             multibody.forward_kinematics(bodies, false);
+            multibody.kinematics_from_last_step = true;
             multibody.update_rigid_bodies_internal(bodies, !is_last_substep, true, false);
 
             if !is_last_substep {
