@@ -10,7 +10,8 @@
 # 2. hold the shipped base's gait for 20 s (quadcl gait --json, three commands): the same report;
 # 3. evaluate the shipped paper run's last checkpoint on crash:FL and invert:RL (16 episodes, --json): the same
 #    figures.
-# Timing fields (wall-clock, steps per second) are dropped before comparing. Prints what
+# Timing fields (wall-clock, steps per second) and the commit the binary was built from are
+# dropped before comparing. Prints what
 # differs, exits 1 if anything does.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,7 +28,7 @@ import json, sys
 def strip(v):
     if isinstance(v, dict):
         return {k: strip(x) for k, x in v.items()
-                if not any(t in k for t in ("wall", "per_s", "elapsed", "_ms", "SPS", "time/", "time_", "git_dirty"))}
+                if not any(t in k for t in ("wall", "per_s", "elapsed", "_ms", "SPS", "time/", "time_", "git_dirty", "git_commit"))}
     if isinstance(v, list):
         return [strip(x) for x in v]
     return v
