@@ -32,7 +32,6 @@ import time
 
 import mujoco
 import numpy as np
-import torch
 from mujoco import rollout
 
 from mujoco_a1 import DEFAULT_Q, KD, KP, a1_model as _a1_model
@@ -118,6 +117,8 @@ class Envs:
 
 
 def mlp(inp, out):
+    import torch
+
     layers, width = [], inp
     for h in (512, 256, 128):
         layers += [torch.nn.Linear(width, h), torch.nn.ELU()]
@@ -126,6 +127,9 @@ def mlp(inp, out):
 
 
 def main():
+    # Imported here, not at the top: python_vs_mujoco.py uses Envs alone, without PyTorch.
+    import torch
+
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--iterations", type=int, default=12)
     p.add_argument("--threads", type=int, default=2)
