@@ -7,11 +7,17 @@
 //! (1536, 512) gradient was 1 % of a training iteration).
 
 use gemm::{gemm, Parallelism};
+use std::sync::OnceLock;
 
-/// The threads one product runs on: candle's setting (the binary pins it at 1,
-/// as each network's products already run on their own core).
+/// The threads one product runs on: candle's `get_num_threads` (`RAYON_NUM_THREADS` when
+/// set, else the physical cores; the binary's `CANDLE_NUM_THREADS=1` sizes only candle's own
+/// kernel pool), read once per process. candle 0.11 reads it anew at every call and, with
+/// `RAYON_NUM_THREADS` unset, counts the cores by parsing /proc/cpuinfo: about 60,000
+/// instructions and a file read per layer product, a fifth of a `quadcl gait` run's
+/// instructions (callgrind). gemm's result does not depend on the count.
 pub(crate) fn parallelism() -> Parallelism {
-    match candle_core::utils::get_num_threads() {
+    static THREADS: OnceLock<usize> = OnceLock::new();
+    match *THREADS.get_or_init(candle_core::utils::get_num_threads) {
         1 => Parallelism::None,
         n => Parallelism::Rayon(n),
     }
