@@ -7,9 +7,15 @@
 #   scripts/findings.sh harvest                        commit every finished sweep into
 #                                                      policies/findings/ (scripts/findings_harvest.sh)
 #   scripts/findings.sh status                         where every sweep stands
+#   scripts/findings.sh save                           keep the finished cells of unharvested sweeps
+#                                                      in policies/findings/progress (commit it)
 #
 # Run folders: runs/findings/NAME. QUADCL_BIN picks the binary (default target/release/quadcl).
 # About 68,000 iterations in all: 12 h or more on 2 cores, an hour or two on 16.
+# runs/ is not committed, so a fresh checkout has none of it: `save` keeps each finished cell's
+# metrics.json and log.txt (no checkpoints) with the hash of the run file it trained, and `run`
+# puts them back into a newly planned sweep where the plan's run file has the same hash, so
+# those cells count as finished. A cell that was stopped midway starts again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${QUADCL_BIN:-target/release/quadcl}
@@ -25,11 +31,63 @@ sweeps=(
   "sequence-12||1"
 )
 shift_file=scenes/findings/sim2real.shift.toml
+progress=policies/findings/progress
+
+# save|restore SWEEP_DIR PROGRESS_DIR KEEP: finished cells from the run folder into the progress
+# folder, or back into a freshly planned run folder (only where the run file's hash matches);
+# KEEP 1: with each cell's final checkpoint (sim2real fine-tunes sequence-12's).
+cells() {
+  python3 - "$@" <<'EOF'
+import json, os, shutil, sys
+mode, sweep, kept, keep = sys.argv[1:]
+files = ["metrics.json", "log.txt"] + (["checkpoints"] if keep == "1" else [])
+def copy(src, dst):
+    for f in files:
+        if os.path.isdir(os.path.join(src, f)):
+            shutil.copytree(os.path.join(src, f), os.path.join(dst, f), dirs_exist_ok=True)
+        elif os.path.exists(os.path.join(src, f)):
+            shutil.copy(os.path.join(src, f), os.path.join(dst, f))
+plan = json.load(open(os.path.join(sweep, "sweep.json")))
+def finished(path):
+    try:
+        m = json.load(open(os.path.join(path, "metrics.json")))
+    except (OSError, ValueError):
+        return False
+    return m.get("completed_steps") == m.get("total_steps") and m.get("total_steps", 0) > 0
+moved = 0
+for cell in plan["cells"]:
+    run = os.path.join(sweep, cell["run"])
+    store = os.path.join(kept, str(cell["index"]))
+    if mode == "save" and finished(run) and not finished(store):
+        tmp = store + ".tmp"
+        shutil.rmtree(tmp, ignore_errors=True)
+        os.makedirs(tmp)
+        copy(run, tmp)
+        with open(os.path.join(tmp, "run_file.sha256"), "w") as f:
+            f.write(cell["run_file_sha256"] + "\n")
+        shutil.rmtree(store, ignore_errors=True)
+        os.rename(tmp, store)
+        moved += 1
+    elif mode == "restore" and finished(store) and not finished(run):
+        sha = open(os.path.join(store, "run_file.sha256")).read().strip()
+        if sha != cell["run_file_sha256"]:
+            print(f"{store}: kept for another run file than cell {cell['index']}'s, not restored", file=sys.stderr)
+            continue
+        os.makedirs(run, exist_ok=True)
+        copy(store, run)
+        moved += 1
+if moved:
+    print(f"{sweep}: {moved} finished cells {'kept in' if mode == 'save' else 'restored from'} {kept}")
+EOF
+}
 
 sim2real() {
   local runs=runs/findings/sequence-12/runs
   for i in 0 1 2; do
     local seed=$((i + 1)) out=runs/findings/sim2real/seed$((i + 1))
+    if [ ! -f "$out/finetune.json" ] && [ -f "$progress/sim2real/seed$seed/finetune.json" ]; then
+      mkdir -p "$out" && cp "$progress/sim2real/seed$seed/finetune.json" "$out/"
+    fi
     [ -f "$out/finetune.json" ] && continue
     local checkpoint
     checkpoint=$(ls -d "$runs/$i"/checkpoints/step-11-* 2>/dev/null | head -n 1)
@@ -47,7 +105,14 @@ case "${1:-}" in
     for entry in "${sweeps[@]}"; do
       name=${entry%%|*}
       out=runs/findings/$name
+      # A harvested sweep is finished: its committed run files stand in (a later sweep may
+      # read them, as fig11-transfer reads the reference's metrics.json).
+      if [ ! -f "$out/sweep.json" ] && [ -f "policies/findings/$name/collected.md" ]; then
+        mkdir -p runs/findings && cp -r "policies/findings/$name" "$out"
+      fi
       [ -f "$out/sweep.json" ] || "$bin" sweep plan "scenes/findings/$name.toml" --out "$out" > /dev/null
+      keep=${entry##*|}
+      [ -d "$progress/$name" ] && cells restore "$out" "$progress/$name" "$keep"
       echo "== $name ($(date -u +%H:%M))"
       "$bin" sweep local "$out" --jobs "$jobs" --threads-per-job "$threads"
     done
@@ -72,6 +137,22 @@ case "${1:-}" in
       cp "$report" policies/findings/sim2real/seed$i/
       cp "$shift_file" policies/findings/sim2real/
     done
+    ;;
+  save)
+    for entry in "${sweeps[@]}"; do
+      name=${entry%%|*}
+      # A harvested sweep is committed whole; its progress is no longer needed.
+      if [ -f "policies/findings/$name/collected.md" ]; then
+        rm -rf "${progress:?}/$name"
+      elif [ -f "runs/findings/$name/sweep.json" ]; then
+        cells save "runs/findings/$name" "$progress/$name" "${entry##*|}"
+      fi
+    done
+    for i in 1 2 3; do
+      report=runs/findings/sim2real/seed$i/finetune.json
+      [ -f "$report" ] && mkdir -p "$progress/sim2real/seed$i" && cp "$report" "$progress/sim2real/seed$i/"
+    done
+    true
     ;;
   status)
     for entry in "${sweeps[@]}"; do
