@@ -208,13 +208,15 @@ fn a_non_finite_action_is_an_error_naming_the_env_and_step() {
     assert!(err.contains("env 0") && err.contains("action[4]") && err.contains("step 0"), "{err}");
 }
 
-fn run_batch(threads: usize) -> (Vec<u32>, Vec<u32>, usize) {
+fn run_batch(threads: usize, on_calling_thread: bool) -> (Vec<u32>, Vec<u32>, usize) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| {
         // Short episodes so auto-resets (and their randomisation) happen too.
         let cfg = EnvConfig { episode_s: 0.4, push_interval_s: 0.2, ..EnvConfig::default() };
         let task: Perturbation = "noise:FL+invert:RR".parse().unwrap();
         let mut envs = VecEnv::new(&cfg, &robot(), &task, 4, 42).unwrap();
+        envs.set_on_calling_thread(on_calling_thread);
+        envs.reset(43).unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
         let mut rewards = Vec::new();
         let mut finished = 0;
@@ -231,8 +233,18 @@ fn run_batch(threads: usize) -> (Vec<u32>, Vec<u32>, usize) {
 
 #[test]
 fn same_seed_is_bit_identical_with_one_and_two_threads() {
-    let (r1, o1, f1) = run_batch(1);
-    let (r2, o2, f2) = run_batch(2);
+    let (r1, o1, f1) = run_batch(1, false);
+    let (r2, o2, f2) = run_batch(2, false);
+    assert!(f1 >= 4, "episodes should have ended and auto-reset ({f1})");
+    assert_eq!(f1, f2);
+    assert_eq!(r1, r2, "rewards differ");
+    assert_eq!(o1, o2, "observations differ");
+}
+
+#[test]
+fn a_batch_on_the_calling_thread_gives_the_pools_numbers() {
+    let (r1, o1, f1) = run_batch(2, false);
+    let (r2, o2, f2) = run_batch(2, true);
     assert!(f1 >= 4, "episodes should have ended and auto-reset ({f1})");
     assert_eq!(f1, f2);
     assert_eq!(r1, r2, "rewards differ");

@@ -98,7 +98,8 @@ def make_vec(robot=None, task="none", num_envs=128, seed=0, config=None, num_thr
         file; or else ``config``: a run file or training config whose ``[env]`` is used.
     task: ``"none"``, ``"crash:FL"``, ``"invert:RL"``, ``"noise:FR"``, combinations with ``+``.
     seed: env i is seeded from (seed, i), as in the Rust learner.
-    num_threads: threads stepping the batch (None: every core, or ``RAYON_NUM_THREADS``).
+    num_threads: threads stepping the batch (None: every core, or ``RAYON_NUM_THREADS``; 1: the
+        calling thread, in order, with the GIL released).
     env_toml: the ``[env]`` settings as TOML text instead (a ``Policy``'s or a ``Sequence``'s).
     """
     if kwargs:

@@ -32,7 +32,8 @@ pub struct NativeVecEnv {
     /// Behind a lock only because a pyclass must be `Sync` (an env's observers are not);
     /// the lock is never contended: every method holds the object exclusively.
     env: Mutex<VecEnv>,
-    /// None: rayon's global pool (all cores, or RAYON_NUM_THREADS).
+    /// None: rayon's global pool (all cores, or RAYON_NUM_THREADS), or the calling thread
+    /// when the batch was made for one thread.
     pool: Option<rayon::ThreadPool>,
     task: String,
     control_dt: f64,
@@ -94,16 +95,19 @@ impl NativeVecEnv {
                 let cfg = env_from_toml(&env_toml)?;
                 let task = parse_task(&task)?;
                 anyhow::ensure!(num_threads != Some(0), "num_threads must be at least 1 (or None for every core)");
+                // One thread: the envs run in order on the calling thread, without a pool whose
+                // worker each call would be handed to and waited for (about 75 µs a call).
                 let pool = match num_threads {
-                    Some(n) => Some(rayon::ThreadPoolBuilder::new().num_threads(n).build()?),
-                    None => None,
+                    Some(n) if n > 1 => Some(rayon::ThreadPoolBuilder::new().num_threads(n).build()?),
+                    _ => None,
                 };
                 let robot = RobotModel::for_config(&cfg)?;
                 let make = || VecEnv::new(&cfg, &robot, &task, num_envs, seed);
-                let env = match &pool {
+                let mut env = match &pool {
                     Some(p) => p.install(make)?,
                     None => make()?,
                 };
+                env.set_on_calling_thread(num_threads == Some(1));
                 Ok(Self {
                     env: Mutex::new(env),
                     pool,
