@@ -170,6 +170,22 @@ pub(crate) fn handle_user_changes_to_rigid_bodies(
                 }
             }
 
+            // A multibody link moved, retyped or re-massed by the user: the link poses and
+            // Jacobians its multibody's last step ended with no longer stand, so its next
+            // step runs the step-start kinematics pass even where it is switched off.
+            if changes.intersects(
+                RigidBodyChanges::POSITION
+                    | RigidBodyChanges::TYPE
+                    | RigidBodyChanges::LOCAL_MASS_PROPERTIES
+                    | RigidBodyChanges::COLLIDERS,
+            ) {
+                if let Some(link) = multibody_joints.rigid_body_link(*handle).copied() {
+                    if let Some(mb) = multibody_joints.get_multibody_mut_internal(link.multibody) {
+                        mb.kinematics_from_last_step = false;
+                    }
+                }
+            }
+
             // NOTE: recompute the mass-properties AFTER dealing with the rigid-body changes
             //       that imply a collider change (in particular, after propagation of the
             //       enabled/disabled status).

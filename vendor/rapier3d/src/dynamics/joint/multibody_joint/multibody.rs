@@ -218,8 +218,9 @@ pub struct Multibody {
         serde(default = "step_start_kinematics_default")
     )]
     step_start_kinematics: bool,
-    /// Whether the link poses and body Jacobians are those the last step's position
-    /// integration ended with (set by the solver, cleared on creation and deserialization).
+    /// Whether the link poses and body Jacobians are those an earlier step's position
+    /// integration ended with, unchanged since (set by the solver; cleared on creation,
+    /// deserialization, `append`, and a tracked user change to a link's rigid-body).
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     pub(crate) kinematics_from_last_step: bool,
     /// Holonomic couplings between two of this multibody's generalized
@@ -459,6 +460,9 @@ impl Multibody {
         );
         // Self-contacts stay disabled for the links of a multibody that had them disabled.
         self.self_contacts_enabled &= rhs.self_contacts_enabled;
+        // New links have no poses or Jacobians yet (the multibody keeps its own
+        // `step_start_kinematics` choice).
+        self.kinematics_from_last_step = false;
     }
 
     /// Whether self-contacts are enabled on this multibody.
@@ -512,12 +516,15 @@ impl Multibody {
     /// recomputes the same link poses and body Jacobians, bit for bit.
     ///
     /// - `true` (the default): the pass runs at every step.
-    /// - `false`: it is skipped whenever the last step ended with this multibody's forward
-    ///   kinematics (a new multibody's first step still runs it). After changing a joint's coordinates or frames, the root
-    ///   rigid-body's pose or its body type, call [`Self::forward_kinematics`] and
-    ///   [`Self::update_rigid_bodies`] before the next step. Changing velocities, springs,
-    ///   motors, damping or limits needs nothing. The rigid-bodies' world mass properties are
-    ///   still updated at the step's start.
+    /// - `false`: it is skipped where an earlier step ended with this multibody's forward
+    ///   kinematics and nothing tracked changed it since. The pass still runs on a new or
+    ///   deserialized multibody, after links were appended, and after the user moved a link's
+    ///   rigid-body, changed its body type, its mass properties or its colliders (the changes
+    ///   the rigid-body set tracks). After changing a joint's coordinates or frames through
+    ///   [`Self::link_mut`], call [`Self::forward_kinematics`] and [`Self::update_rigid_bodies`]
+    ///   before the next step. Changing velocities, springs, motors, damping or limits needs
+    ///   nothing. Continuous collision detection's motion clamping is not tracked: leave the
+    ///   pass on for a multibody with CCD enabled on its links.
     pub fn set_step_start_kinematics(&mut self, enabled: bool) {
         self.step_start_kinematics = enabled;
     }
