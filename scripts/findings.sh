@@ -13,9 +13,9 @@
 # Run folders: runs/findings/NAME. QUADCL_BIN picks the binary (default target/release/quadcl).
 # About 68,000 iterations in all: 12 h or more on 2 cores, an hour or two on 16.
 # runs/ is not committed, so a fresh checkout has none of it: `save` keeps each finished cell's
-# metrics.json and log.txt (no checkpoints) with the hash of the run file it trained, and `run`
-# puts them back into a newly planned sweep where the plan's run file has the same hash, so
-# those cells count as finished. A cell that was stopped midway starts again.
+# metrics.json and log.txt (no checkpoints) with the run file it trained (the checkout's path
+# written as {repository}), and `run` puts them back into a newly planned sweep where the plan's
+# run file is the same, so those cells count as finished. A cell stopped midway starts again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${QUADCL_BIN:-target/release/quadcl}
@@ -34,7 +34,7 @@ shift_file=scenes/findings/sim2real.shift.toml
 progress=policies/findings/progress
 
 # save|restore SWEEP_DIR PROGRESS_DIR KEEP: finished cells from the run folder into the progress
-# folder, or back into a freshly planned run folder (only where the run file's hash matches);
+# folder, or back into a freshly planned run folder (only where the run file is the same);
 # KEEP 1: with each cell's final checkpoint (sim2real fine-tunes sequence-12's).
 cells() {
   python3 - "$@" <<'EOF'
@@ -54,23 +54,32 @@ def finished(path):
     except (OSError, ValueError):
         return False
     return m.get("completed_steps") == m.get("total_steps") and m.get("total_steps", 0) > 0
+def run_file(cell):
+    # The cell's run file with this checkout's path taken out: the plan writes the base
+    # policy's and the reference's absolute paths into it.
+    text = open(os.path.join(sweep, cell["config"])).read()
+    return text.replace(os.getcwd(), "{repository}")
+def kept_run_file(store):
+    try:
+        return open(os.path.join(store, "run_file.toml")).read()
+    except OSError:
+        return None
 moved = 0
 for cell in plan["cells"]:
     run = os.path.join(sweep, cell["run"])
     store = os.path.join(kept, str(cell["index"]))
-    if mode == "save" and finished(run) and not finished(store):
+    if mode == "save" and finished(run) and not (finished(store) and kept_run_file(store) == run_file(cell)):
         tmp = store + ".tmp"
         shutil.rmtree(tmp, ignore_errors=True)
         os.makedirs(tmp)
         copy(run, tmp)
-        with open(os.path.join(tmp, "run_file.sha256"), "w") as f:
-            f.write(cell["run_file_sha256"] + "\n")
+        with open(os.path.join(tmp, "run_file.toml"), "w") as f:
+            f.write(run_file(cell))
         shutil.rmtree(store, ignore_errors=True)
         os.rename(tmp, store)
         moved += 1
     elif mode == "restore" and finished(store) and not finished(run):
-        sha = open(os.path.join(store, "run_file.sha256")).read().strip()
-        if sha != cell["run_file_sha256"]:
+        if kept_run_file(store) != run_file(cell):
             print(f"{store}: kept for another run file than cell {cell['index']}'s, not restored", file=sys.stderr)
             continue
         os.makedirs(run, exist_ok=True)
@@ -108,7 +117,7 @@ case "${1:-}" in
       # A harvested sweep is finished: its committed run files stand in (a later sweep may
       # read them, as fig11-transfer reads the reference's metrics.json).
       if [ ! -f "$out/sweep.json" ] && [ -f "policies/findings/$name/collected.md" ]; then
-        mkdir -p runs/findings && cp -r "policies/findings/$name" "$out"
+        mkdir -p "$out" && cp -r "policies/findings/$name/." "$out/"
       fi
       [ -f "$out/sweep.json" ] || "$bin" sweep plan "scenes/findings/$name.toml" --out "$out" > /dev/null
       keep=${entry##*|}
@@ -125,7 +134,11 @@ case "${1:-}" in
       args=()
       [ -n "$against" ] && args+=(--against "$against")
       [ "$keep" = 1 ] && args+=(--keep-checkpoints)
-      if [ -f "runs/findings/$name/sweep.json" ]; then
+      # Harvested already (and standing in for its run folder): remove policies/findings/NAME
+      # to harvest it again.
+      if [ -f "policies/findings/$name/collected.md" ]; then
+        echo "$name: harvested already"
+      elif [ -f "runs/findings/$name/sweep.json" ]; then
         QUADCL_BIN=$bin scripts/findings_harvest.sh "$name" "${args[@]}" || echo "$name: not harvested"
       fi
     done
