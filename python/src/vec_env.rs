@@ -103,9 +103,11 @@ impl NativeVecEnv {
                 };
                 let robot = RobotModel::for_config(&cfg)?;
                 let make = || VecEnv::new(&cfg, &robot, &task, num_envs, seed);
-                let mut env = match &pool {
-                    Some(p) => p.install(make)?,
-                    None => make()?,
+                let mut env = match (&pool, num_threads) {
+                    (Some(p), _) => p.install(make)?,
+                    // Built on one thread too (rayon's global pool would start a worker per core).
+                    (None, Some(1)) => rayon::ThreadPoolBuilder::new().num_threads(1).build()?.install(make)?,
+                    (None, _) => make()?,
                 };
                 env.set_on_calling_thread(num_threads == Some(1));
                 Ok(Self {

@@ -140,7 +140,7 @@ impl VecEnv {
         }
     }
 
-    /// `true`: [`Self::step`] and [`Self::reset`] run the envs in order on the calling thread
+    /// `true`: [`Self::step`], [`Self::reset`] and [`Self::restore`] run the envs in order on the calling thread
     /// (one thread's worth of work without a pool's hand-off); `false` (the default): on rayon's
     /// pool, the one the caller runs in. The numbers are the same either way.
     pub fn set_on_calling_thread(&mut self, on: bool) {
@@ -177,7 +177,12 @@ impl VecEnv {
             replays.len(),
             self.envs.len()
         );
-        self.envs.par_iter_mut().zip(replays).try_for_each(|(env, replay)| env.restore(replay))?;
+        let restore = |(env, replay): (&mut LocomotionEnv, &EpisodeReplay)| env.restore(replay);
+        if self.on_calling_thread {
+            self.envs.iter_mut().zip(replays).try_for_each(restore)?;
+        } else {
+            self.envs.par_iter_mut().zip(replays).try_for_each(restore)?;
+        }
         self.gather();
         Ok(())
     }
