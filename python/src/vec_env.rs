@@ -95,21 +95,22 @@ impl NativeVecEnv {
                 let cfg = env_from_toml(&env_toml)?;
                 let task = parse_task(&task)?;
                 anyhow::ensure!(num_threads != Some(0), "num_threads must be at least 1 (or None for every core)");
-                // One thread: the envs run in order on the calling thread, without a pool whose
-                // worker each call would be handed to and waited for (about 75 µs a call).
                 let pool = match num_threads {
-                    Some(n) if n > 1 => Some(rayon::ThreadPoolBuilder::new().num_threads(n).build()?),
-                    _ => None,
+                    Some(n) => Some(rayon::ThreadPoolBuilder::new().num_threads(n).build()?),
+                    None => None,
                 };
                 let robot = RobotModel::for_config(&cfg)?;
                 let make = || VecEnv::new(&cfg, &robot, &task, num_envs, seed);
-                let mut env = match (&pool, num_threads) {
-                    (Some(p), _) => p.install(make)?,
-                    // Built on one thread too (rayon's global pool would start a worker per core).
-                    (None, Some(1)) => rayon::ThreadPoolBuilder::new().num_threads(1).build()?.install(make)?,
-                    (None, _) => make()?,
+                let mut env = match &pool {
+                    Some(p) => p.install(make)?,
+                    None => make()?,
                 };
-                env.set_on_calling_thread(num_threads == Some(1));
+                // One thread: the envs run in order on the calling thread, without a pool whose
+                // worker each call would be handed to and waited for (about 75 µs a call); the
+                // one-thread pool only built them (rayon's global pool would start a worker per core).
+                let on_calling_thread = num_threads == Some(1);
+                env.set_on_calling_thread(on_calling_thread);
+                let pool = if on_calling_thread { None } else { pool };
                 Ok(Self {
                     env: Mutex::new(env),
                     pool,
