@@ -18,6 +18,15 @@ above, so its env steps/s can stand beside `quadcl bench --json --only ppo`
 (`ppo_env_steps_per_s_dense` is quadcl's like-for-like config,
 scenes/train-dense.toml). It is not tuned to learn to walk.
 
+`--cenet` adds the full method's third network at quadcl's sizes, dense: the
+CENet's encoder on the last 5 observations (225 -> 256 -> 128 -> 3 velocity +
+16 latent means + 16 log-variances) and decoder (19 -> 128 -> 256 -> 45
+next observation), ELU, trained on the base velocity, the next
+observation and a beta-VAE KL; the actor reads the observation and the
+rollout's context (64 inputs); 2 minibatches (scenes/train-base.toml's). That
+is the arithmetic of `ppo_env_steps_per_s` (the full method) without its
+masks, which cost quadcl about nothing (`quadcl bench --only nn`).
+
     pip install torch mujoco numpy
     python3 scripts/python_ppo_baseline.py [--iterations 12] [--threads 2] [--json]
 
@@ -116,11 +125,11 @@ class Envs:
         return obs, priv, reward.astype(np.float32), fell, timeout & ~fell
 
 
-def mlp(inp, out):
+def mlp(inp, out, hidden=(512, 256, 128)):
     import torch
 
     layers, width = [], inp
-    for h in (512, 256, 128):
+    for h in hidden:
         layers += [torch.nn.Linear(width, h), torch.nn.ELU()]
         width = h
     return torch.nn.Sequential(*layers, torch.nn.Linear(width, out))
@@ -135,27 +144,47 @@ def main():
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--envs", type=int, default=128)
     p.add_argument("--steps", type=int, default=24)
+    p.add_argument("--cenet", action="store_true", help="the full method's networks, without masks")
+    p.add_argument("--minibatches", type=int, help="default 4, or 2 with --cenet")
     p.add_argument("--json", action="store_true")
     a = p.parse_args()
+    minibatches = a.minibatches or (2 if a.cenet else 4)
     torch.set_num_threads(a.threads)
     torch.manual_seed(0)
     envs = Envs(a.envs, a.threads, 0)
     obs, priv = envs.observe()[:2]
-    actor, critic = mlp(obs.shape[1], 12), mlp(priv.shape[1], 1)
+    history_len, latent = 5, 16
+    context_dim = 3 + latent if a.cenet else 0
+    actor, critic = mlp(obs.shape[1] + context_dim, 12), mlp(priv.shape[1], 1)
     log_std = torch.nn.Parameter(torch.zeros(12))
     params = list(actor.parameters()) + list(critic.parameters()) + [log_std]
+    if a.cenet:
+        encoder = mlp(history_len * obs.shape[1], 3 + 2 * latent, (256, 128))
+        decoder = mlp(3 + latent, obs.shape[1], (128, 256))
+        params += list(encoder.parameters()) + list(decoder.parameters())
+        history = np.zeros((a.envs, history_len, obs.shape[1]), dtype=np.float32)
+        history[:, -1] = obs
     opt = torch.optim.Adam(params, lr=1e-3)
     n, T = a.envs, a.steps
     rows = []
+    keys = ("obs", "priv", "act", "logp", "val", "rew", "term", "trunc")
+    keys += ("hist", "ctx", "next", "vel") if a.cenet else ()
     for it in range(a.iterations):
         t0 = time.perf_counter()
         physics = inference = 0.0
-        buf = {k: [] for k in ("obs", "priv", "act", "logp", "val", "rew", "term", "trunc")}
+        buf = {k: [] for k in keys}
         for _ in range(T):
             t = time.perf_counter()
             with torch.no_grad():
                 o, pv = torch.from_numpy(obs), torch.from_numpy(priv)
-                mean, value = actor(o), critic(pv).squeeze(1)
+                if a.cenet:
+                    h = torch.from_numpy(history.reshape(n, -1).copy())
+                    est = encoder(h)
+                    ctx = est[:, : 3 + latent]  # the velocity estimate and the latent means
+                    mean = actor(torch.cat([o, ctx], 1))
+                else:
+                    mean = actor(o)
+                value = critic(pv).squeeze(1)
                 dist = torch.distributions.Normal(mean, log_std.exp())
                 act = dist.sample()
                 logp = dist.log_prob(act).sum(1)
@@ -165,6 +194,16 @@ def main():
             physics += time.perf_counter() - t
             for k, v in zip(buf, (o, pv, act, logp, value, rew, term, trunc)):
                 buf[k].append(torch.as_tensor(v))
+            if a.cenet:
+                # The next observation before a reset would be the target; the batch's is close
+                # enough for a throughput harness. A reset env's history restarts.
+                buf["hist"].append(h)
+                buf["ctx"].append(ctx)
+                buf["next"].append(torch.from_numpy(obs2))
+                buf["vel"].append(pv[:, -3:] * 0.5)  # the base velocity: the privileged part
+                history = np.roll(history, -1, axis=1)
+                history[:, -1] = obs2
+                history[term | trunc, :-1] = 0.0
             obs, priv = obs2, priv2
         t = time.perf_counter()
         with torch.no_grad():
@@ -181,11 +220,12 @@ def main():
             adv[s] = gae
         ret = (adv + val).reshape(-1)
         adv = adv.reshape(-1)
-        flat = {k: torch.stack(buf[k]).reshape(T * n, -1).squeeze(-1) for k in ("obs", "priv", "act", "logp")}
+        flat = {k: torch.stack(buf[k]).reshape(T * n, -1).squeeze(-1) for k in keys if k not in ("val", "rew", "term", "trunc")}
         t = time.perf_counter()
         for _ in range(5):
-            for idx in torch.randperm(T * n).chunk(4):
-                mean = actor(flat["obs"][idx])
+            for idx in torch.randperm(T * n).chunk(minibatches):
+                o = flat["obs"][idx]
+                mean = actor(torch.cat([o, flat["ctx"][idx]], 1) if a.cenet else o)
                 dist = torch.distributions.Normal(mean, log_std.exp())
                 logp = dist.log_prob(flat["act"][idx]).sum(1)
                 ratio = (logp - flat["logp"][idx]).exp()
@@ -194,6 +234,14 @@ def main():
                 pg = -torch.min(ratio * a_, ratio.clamp(0.8, 1.2) * a_).mean()
                 v = critic(flat["priv"][idx]).squeeze(1)
                 loss = pg + ((v - ret[idx]) ** 2).mean() - 0.01 * dist.entropy().sum(1).mean()
+                if a.cenet:
+                    est = encoder(flat["hist"][idx])
+                    vel, mu, logvar = est[:, :3], est[:, 3 : 3 + latent], est[:, 3 + latent :]
+                    z = mu + torch.randn_like(mu) * (0.5 * logvar).exp()
+                    rec = decoder(torch.cat([vel, z], 1))
+                    kl = -0.5 * (1 + logvar - mu**2 - logvar.exp()).sum(1).mean()
+                    cenet = ((vel - flat["vel"][idx]) ** 2).mean() + ((rec - flat["next"][idx]) ** 2).mean() + kl
+                    loss = loss + cenet
                 opt.zero_grad()
                 loss.backward()
                 torch.nn.utils.clip_grad_norm_(params, 1.0)
@@ -213,6 +261,8 @@ def main():
         "py_update_ms": m[3] * 1e3,
         "py_other_ms": (m[0] - m[1] - m[2] - m[3]) * 1e3,
         "threads": a.threads,
+        "cenet": a.cenet,
+        "minibatches": minibatches,
         "torch": torch.__version__,
         "mujoco": mujoco.__version__,
         "measured_iterations": max(len(rows) - 2, 1),
