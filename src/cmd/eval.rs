@@ -45,7 +45,7 @@ pub struct EvalArgs {
     pub push_max_vel: Option<f32>,
     /// Take the actions from this program instead of the policy's networks (run with `sh -c`;
     /// it reads observation histories and writes actions as little-endian f32 on its standard
-    /// input and output, e.g. `python3 scripts/onnx_policy.py task.onnx`). The policy directory
+    /// input and output, e.g. `python3 scripts/policy_server.py task.onnx`). The policy directory
     /// still gives the environment.
     #[arg(long, value_name = "CMD")]
     pub policy_cmd: Option<String>,

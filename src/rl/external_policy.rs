@@ -1,5 +1,5 @@
 //! A policy that runs in another program (`quadcl eval --policy-cmd CMD`): an
-//! exported model in ONNX Runtime or PyTorch (`scripts/onnx_policy.py`), or a
+//! exported model in ONNX Runtime or NumPy (`scripts/policy_server.py`), or a
 //! controller written in any language, driving quadcl's simulator.
 //!
 //! The program is started with `sh -c CMD` and the variables QUADCL_NUM_ENVS,
