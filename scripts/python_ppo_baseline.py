@@ -154,21 +154,22 @@ def main():
     envs = Envs(a.envs, a.threads, 0)
     obs, priv = envs.observe()[:2]
     history_len, latent = 5, 16
-    context_dim = 3 + latent if a.cenet else 0
-    actor, critic = mlp(obs.shape[1] + context_dim, 12), mlp(priv.shape[1], 1)
+    context = 3 + latent  # the velocity estimate and the latent means
+    actor, critic = mlp(obs.shape[1] + (context if a.cenet else 0), 12), mlp(priv.shape[1], 1)
     log_std = torch.nn.Parameter(torch.zeros(12))
     params = list(actor.parameters()) + list(critic.parameters()) + [log_std]
     if a.cenet:
-        encoder = mlp(history_len * obs.shape[1], 3 + 2 * latent, (256, 128))
-        decoder = mlp(3 + latent, obs.shape[1], (128, 256))
+        encoder = mlp(history_len * obs.shape[1], context + latent, (256, 128))
+        decoder = mlp(context, obs.shape[1], (128, 256))
         params += list(encoder.parameters()) + list(decoder.parameters())
         history = np.zeros((a.envs, history_len, obs.shape[1]), dtype=np.float32)
         history[:, -1] = obs
     opt = torch.optim.Adam(params, lr=1e-3)
     n, T = a.envs, a.steps
     rows = []
-    keys = ("obs", "priv", "act", "logp", "val", "rew", "term", "trunc")
-    keys += ("hist", "ctx", "next", "vel") if a.cenet else ()
+    # Rows the update draws minibatches from, then the per-step columns GAE reads.
+    sampled = ("obs", "priv", "act", "logp") + (("hist", "ctx", "next", "vel") if a.cenet else ())
+    keys = sampled[:4] + ("val", "rew", "term", "trunc") + sampled[4:]
     for it in range(a.iterations):
         t0 = time.perf_counter()
         physics = inference = 0.0
@@ -180,7 +181,7 @@ def main():
                 if a.cenet:
                     h = torch.from_numpy(history.reshape(n, -1).copy())
                     est = encoder(h)
-                    ctx = est[:, : 3 + latent]  # the velocity estimate and the latent means
+                    ctx = est[:, :context]
                     mean = actor(torch.cat([o, ctx], 1))
                 else:
                     mean = actor(o)
@@ -220,7 +221,7 @@ def main():
             adv[s] = gae
         ret = (adv + val).reshape(-1)
         adv = adv.reshape(-1)
-        flat = {k: torch.stack(buf[k]).reshape(T * n, -1).squeeze(-1) for k in keys if k not in ("val", "rew", "term", "trunc")}
+        flat = {k: torch.stack(buf[k]).reshape(T * n, -1).squeeze(-1) for k in sampled}
         t = time.perf_counter()
         for _ in range(5):
             for idx in torch.randperm(T * n).chunk(minibatches):
@@ -236,7 +237,7 @@ def main():
                 loss = pg + ((v - ret[idx]) ** 2).mean() - 0.01 * dist.entropy().sum(1).mean()
                 if a.cenet:
                     est = encoder(flat["hist"][idx])
-                    vel, mu, logvar = est[:, :3], est[:, 3 : 3 + latent], est[:, 3 + latent :]
+                    vel, mu, logvar = est[:, :3], est[:, 3:context], est[:, context:]
                     z = mu + torch.randn_like(mu) * (0.5 * logvar).exp()
                     rec = decoder(torch.cat([vel, z], 1))
                     kl = -0.5 * (1 + logvar - mu**2 - logvar.exp()).sum(1).mean()
