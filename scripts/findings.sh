@@ -3,7 +3,8 @@
 # resumable: a second call picks up where the first stopped (`quadcl sweep local` resumes
 # stopped cells and skips finished ones; a fine-tuning with its finetune.json is done).
 #
-#   scripts/findings.sh run [JOBS [THREADS_PER_JOB]]   plan and train everything (default 2 1)
+#   scripts/findings.sh run [JOBS [THREADS_PER_JOB]]   plan and train everything: JOBS workers
+#                                                      (default 2, 1 thread each) share the cells
 #   scripts/findings.sh harvest                        commit every finished sweep into
 #                                                      policies/findings/ (scripts/findings_harvest.sh)
 #   scripts/findings.sh status                         where every sweep stands
@@ -21,14 +22,16 @@ cd "$(dirname "$0")/.."
 bin=${QUADCL_BIN:-target/release/quadcl}
 [ -x "$bin" ] || { echo "$bin: no such binary (cargo build --release, or set QUADCL_BIN)" >&2; exit 1; }
 # name, the group the others are set against (paired by seed), whether the final checkpoints
-# are kept (sim2real fine-tunes sequence-12's).
+# are kept (sim2real fine-tunes sequence-12's), the sweep whose cells must all have finished
+# before this one's start (fig11-transfer reads the reference's curves). In the order the
+# workers take them: the long sequence-12 cells early, so that the last cells to run are short.
 sweeps=(
-  "fig11-reference||0"
-  "fig11-transfer|init=scratch|0"
-  "fig4-methods|name=ours|0"
-  "fig5-selection|lambda=0.25|0"
-  "fig8-plasticity|reinit_scores=none reinit_weights=false|0"
-  "sequence-12||1"
+  "fig11-reference||0|"
+  "fig11-transfer|init=scratch|0|fig11-reference"
+  "fig4-methods|name=ours|0|"
+  "sequence-12||1|"
+  "fig5-selection|lambda=0.25|0|"
+  "fig8-plasticity|reinit_scores=none reinit_weights=false|0|"
 )
 shift_file=scenes/findings/sim2real.shift.toml
 progress=policies/findings/progress
@@ -90,21 +93,46 @@ if moved:
 EOF
 }
 
-sim2real() {
-  local runs=runs/findings/sequence-12/runs
-  for i in 0 1 2; do
-    local seed=$((i + 1)) out=runs/findings/sim2real/seed$((i + 1))
-    if [ ! -f "$out/finetune.json" ] && [ -f "$progress/sim2real/seed$seed/finetune.json" ]; then
-      mkdir -p "$out" && cp "$progress/sim2real/seed$seed/finetune.json" "$out/"
-    fi
-    [ -f "$out/finetune.json" ] && continue
-    local checkpoint
-    checkpoint=$(ls -d "$runs/$i"/checkpoints/step-11-* 2>/dev/null | head -n 1)
-    [ -n "$checkpoint" ] || { echo "sim2real: $runs/$i has no final checkpoint yet" >&2; return 1; }
-    rm -rf "$out"
-    mkdir -p runs/findings/sim2real
-    "$bin" finetune --policy "$checkpoint" --task crash:FL --shift "$shift_file" --seed "$seed" \
-      --episodes 32 --out "$out"
+# sim2real, seed $1 (0-based cell of sequence-12), fine-tuned with $2 threads; done once its
+# finetune.json is there (kept in progress/ across checkouts).
+sim2real_seed() {
+  local i=$1 seed=$(($1 + 1)) runs=runs/findings/sequence-12/runs
+  local out=runs/findings/sim2real/seed$seed checkpoint
+  if [ ! -f "$out/finetune.json" ] && [ -f "$progress/sim2real/seed$seed/finetune.json" ]; then
+    mkdir -p "$out" && cp "$progress/sim2real/seed$seed/finetune.json" "$out/"
+  fi
+  [ -f "$out/finetune.json" ] && return 0
+  checkpoint=$(ls -d "$runs/$i"/checkpoints/step-11-* 2>/dev/null | head -n 1)
+  [ -n "$checkpoint" ] || { echo "sim2real: $runs/$i has no final checkpoint yet" >&2; return 1; }
+  rm -rf "$out"
+  mkdir -p runs/findings/sim2real
+  RAYON_NUM_THREADS=$2 "$bin" finetune --policy "$checkpoint" --task crash:FL --shift "$shift_file" \
+    --seed "$seed" --episodes 32 --out "$out"
+}
+
+# Whether every cell of runs/findings/$1 has finished; waits while any of them is running
+# (another worker's last), and fails if one stopped or failed without finishing.
+sweep_finished() {
+  local dir=runs/findings/$1 states
+  while :; do
+    states=$("$bin" sweep status "$dir" --json | python3 -c 'import json, sys; print(" ".join(sorted({c["state"] for c in json.load(sys.stdin)})))')
+    [ "$states" = finished ] && return 0
+    [[ " $states " == *" running "* ]] || { echo "$dir: not every cell finished ($states)" >&2; return 1; }
+    sleep 60
+  done
+}
+
+# Worker $1: one `sweep local --jobs 1` on each sweep in turn. Several `sweep local` on one
+# folder share its cells (each claims a cell under the folder's lock before starting it), so
+# the workers train a sweep together, and one that finds no cell left moves on to the next
+# while the others finish theirs.
+worker() {
+  local entry name after
+  for entry in "${sweeps[@]}"; do
+    IFS='|' read -r name _ _ after <<< "$entry"
+    [ -z "$after" ] || sweep_finished "$after"
+    echo "== $name: worker $1 ($(date -u +%H:%M))"
+    "$bin" sweep local "runs/findings/$name" --jobs 1 --threads-per-job "$2"
   done
 }
 
@@ -112,7 +140,7 @@ case "${1:-}" in
   run)
     jobs=${2:-2} threads=${3:-1}
     for entry in "${sweeps[@]}"; do
-      name=${entry%%|*}
+      IFS='|' read -r name _ keep _ <<< "$entry"
       out=runs/findings/$name
       # A harvested sweep is finished: its committed run files stand in (a later sweep may
       # read them, as fig11-transfer reads the reference's metrics.json).
@@ -120,17 +148,29 @@ case "${1:-}" in
         mkdir -p "$out" && cp -r "policies/findings/$name/." "$out/"
       fi
       [ -f "$out/sweep.json" ] || "$bin" sweep plan "scenes/findings/$name.toml" --out "$out" > /dev/null
-      keep=${entry##*|}
       [ -d "$progress/$name" ] && cells restore "$out" "$progress/$name" "$keep"
-      echo "== $name ($(date -u +%H:%M))"
-      "$bin" sweep local "$out" --jobs "$jobs" --threads-per-job "$threads"
     done
+    pids=()
+    for w in $(seq 1 "$jobs"); do
+      worker "$w" "$threads" &
+      pids+=($!)
+    done
+    failed=0
+    for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
+    [ "$failed" = 0 ] || { echo "a worker stopped on a failed cell (its sweep's logs/ say why); run again to resume" >&2; exit 1; }
     echo "== sim2real ($(date -u +%H:%M))"
-    sim2real
+    # The three fine-tunings side by side (short; on 2 cores three share them).
+    pids=()
+    for i in 0 1 2; do
+      sim2real_seed "$i" "$threads" &
+      pids+=($!)
+    done
+    for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
+    [ "$failed" = 0 ] || exit 1
     ;;
   harvest)
     for entry in "${sweeps[@]}"; do
-      IFS='|' read -r name against keep <<< "$entry"
+      IFS='|' read -r name against keep _ <<< "$entry"
       args=()
       [ -n "$against" ] && args+=(--against "$against")
       [ "$keep" = 1 ] && args+=(--keep-checkpoints)
@@ -158,7 +198,8 @@ case "${1:-}" in
       if [ -f "policies/findings/$name/collected.md" ]; then
         rm -rf "${progress:?}/$name"
       elif [ -f "runs/findings/$name/sweep.json" ]; then
-        cells save "runs/findings/$name" "$progress/$name" "${entry##*|}"
+        IFS='|' read -r _ _ keep _ <<< "$entry"
+        cells save "runs/findings/$name" "$progress/$name" "$keep"
       fi
     done
     for i in 1 2 3; do

@@ -1,7 +1,8 @@
 //! `quadcl sweep local` through the binary, on a 2 x 2 sweep (capacity x seed) of a toy
 //! run: killed with SIGKILL part-way and run again, it resumes the stopped cells and
 //! collects into the same table as a sweep that ran uninterrupted, and every cell's
-//! metrics.json is the same (provenance aside) whatever --jobs and threads it ran with.
+//! metrics.json is the same (provenance aside) whatever --jobs and threads it ran with; two
+//! `sweep local` started together on one folder train each cell once between them.
 
 use std::path::Path;
 use std::process::Command;
@@ -105,5 +106,40 @@ fn a_sweep_killed_and_run_again_collects_the_same_table_as_an_uninterrupted_one(
     assert_eq!(table["groups"][0]["finished"], 2);
     // Nothing left to do: a third run trains nothing.
     let again = quadcl(&["sweep", "local"], &killed);
+    assert!(again.contains("0 cells finished now, 4 before"), "{again}");
+}
+
+#[test]
+fn two_sweeps_on_one_folder_share_its_cells_and_train_each_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("toy.toml"), RUN).unwrap();
+    std::fs::write(tmp.path().join("sweep.toml"), SWEEP).unwrap();
+    let dir = plan(tmp.path(), "shared");
+    // Started together, both list all four cells as to train before either starts one.
+    let sweeps: Vec<std::process::Child> = (0..2)
+        .map(|_| {
+            Command::new(env!("CARGO_BIN_EXE_quadcl"))
+                .args(["sweep", "local", "--jobs", "1", "--threads-per-job", "1"])
+                .arg(&dir)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut finished_now = 0;
+    for sweep in sweeps {
+        let out = sweep.wait_with_output().unwrap();
+        assert!(out.status.success());
+        let report = String::from_utf8_lossy(&out.stdout).into_owned();
+        finished_now += report.split(" cells finished now").next().unwrap().trim().parse::<usize>().unwrap();
+    }
+    assert_eq!(finished_now, 4, "each cell finished by one of the two");
+    for cell in 0..4 {
+        let log = std::fs::read_to_string(dir.join(format!("logs/{cell}.log"))).unwrap();
+        assert_eq!(log.matches("== quadcl sweep local: cell").count(), 1, "cell {cell} started once:\n{log}");
+        assert_eq!(completed(&dir, cell), 3, "cell {cell}");
+    }
+    let again = quadcl(&["sweep", "local"], &dir);
     assert!(again.contains("0 cells finished now, 4 before"), "{again}");
 }

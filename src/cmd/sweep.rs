@@ -22,7 +22,8 @@ pub struct SweepArgs {
 pub enum SweepCommand {
     /// Expand a sweep file into one run file per cell (DIR/cells/I.toml) and DIR/sweep.json, every cell checked.
     Plan(PlanArgs),
-    /// Train every cell that has not finished on this machine (resuming stopped ones), N at a time.
+    /// Train every cell that has not finished on this machine (resuming stopped ones), N at a time;
+    /// several on one folder share its cells.
     Local(LocalArgs),
     /// Write DIR/sweep.sbatch, a Slurm array job of the unfinished cells, and submit it with --submit.
     Slurm(SlurmArgs),
@@ -136,8 +137,12 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 report.failed,
                 a.dir.display()
             );
+            let elsewhere = match report.running_elsewhere.len() {
+                0 => String::new(),
+                n => format!(", {n} left to another process"),
+            };
             println!(
-                "{} cells finished now, {} before; collect with `quadcl sweep collect {}`",
+                "{} cells finished now, {} before{elsewhere}; collect with `quadcl sweep collect {}`",
                 report.finished.len(),
                 report.already_finished.len(),
                 a.dir.display()

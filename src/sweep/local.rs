@@ -11,8 +11,11 @@
 //! file) before any starts. A child dies with the sweep (Linux: its parent-death
 //! signal), so a killed sweep leaves no orphan writing into a run folder; a cell
 //! whose marker names a live process (another `sweep local`) is left to it.
+//! Several `sweep local` on one folder share its cells: each checks a cell again
+//! under the folder's claim lock just before starting it, so none starts a cell
+//! another has started or finished since, and each runs until no cell is left.
 
-use super::marker::{hostname, read_marker, write_marker, Marker};
+use super::marker::{hostname, read_marker, write_marker, ClaimLock, Marker};
 use super::plan::{Cell, Plan};
 use super::status::cell_finished;
 use super::LOGS_DIR;
@@ -51,7 +54,8 @@ pub struct LocalReport {
     pub already_finished: Vec<usize>,
     /// Cells whose run failed.
     pub failed: Vec<usize>,
-    /// Cells left to another live runner.
+    /// Cells left to another live runner: running in another process when this one
+    /// reached them, or finished by it meanwhile.
     pub running_elsewhere: Vec<usize>,
 }
 
@@ -94,6 +98,14 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
     while !todo.is_empty() || !running.is_empty() {
         while running.len() < options.jobs.max(1) {
             let Some(cell) = todo.pop() else { break };
+            // Another `sweep local` on this folder may have taken the cell since the list was
+            // made: the check and the start happen under the folder's claim lock.
+            let _claim = ClaimLock::acquire(&dir)?;
+            if cell_finished(&dir, cell) || read_marker(&dir, cell.index).is_some_and(|m| m.is_alive()) {
+                say(&format!("cell {} ({}): taken by another process, left to it", cell.index, cell.name));
+                report.running_elsewhere.push(cell.index);
+                continue;
+            }
             let child = spawn_cell(&dir, cell, options)?;
             write_marker(&dir, cell.index, Some(&Marker::Running { pid: child.id(), host: hostname() }))?;
             say(&format!("cell {} ({}): started", cell.index, cell.name));

@@ -3,7 +3,8 @@
 //! `quadcl run` is alive, `failed` (with its exit status) after it failed,
 //! and nothing once it finished. A `running` marker whose process is gone
 //! (the sweep was killed) reads as not running: the run folder says how far
-//! the cell got, and the next `sweep local` resumes it.
+//! the cell got, and the next `sweep local` resumes it. `DIR/state/claim.lock`
+//! is the lock under which a `sweep local` checks a cell and starts it.
 
 use super::STATE_DIR;
 use crate::util::write_atomic;
@@ -50,6 +51,40 @@ pub fn write_marker(dir: &Path, index: usize, marker: Option<&Marker>) -> anyhow
         Some(m) => write_atomic(&path, serde_json::to_string(m)?.as_bytes()),
         None if path.exists() => std::fs::remove_file(&path).with_context(|| format!("removing {}", path.display())),
         None => Ok(()),
+    }
+}
+
+/// The folder's claim lock (`DIR/state/claim.lock`, an exclusive `flock`), held while a
+/// `sweep local` checks that a cell is still free and starts it, so that several `sweep local`
+/// on one folder (on this machine, or on hosts sharing it where `flock` works across them)
+/// never start the same cell twice. Released when dropped.
+pub struct ClaimLock {
+    _file: std::fs::File,
+}
+
+impl ClaimLock {
+    /// Waits for the claim lock of the sweep folder `dir`.
+    pub fn acquire(dir: &Path) -> anyhow::Result<Self> {
+        let state = dir.join(STATE_DIR);
+        std::fs::create_dir_all(&state).with_context(|| format!("creating {}", state.display()))?;
+        let path = state.join("claim.lock");
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .with_context(|| format!("opening {}", path.display()))?;
+        use std::os::fd::AsRawFd;
+        loop {
+            // SAFETY: flock on a descriptor this function owns; it is released when the file closes.
+            if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX) } == 0 {
+                return Ok(Self { _file: file });
+            }
+            let err = std::io::Error::last_os_error();
+            if err.kind() != std::io::ErrorKind::Interrupted {
+                return Err(err).with_context(|| format!("locking {}", path.display()));
+            }
+        }
     }
 }
 
