@@ -121,7 +121,7 @@ impl Measure {
             Measure::Performance => "normalised return (0-1)",
             Measure::LinVelErr => "|v_xy - v_cmd| (m/s)",
             Measure::AngVelErr => "|ω_z - ω_cmd| (rad/s)",
-            Measure::FallRate => "share of episodes fallen (0-1)",
+            Measure::FallRate => "share of ended episodes that fell (0-1)",
         }
     }
 
