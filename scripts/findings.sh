@@ -23,12 +23,14 @@ bin=${QUADCL_BIN:-target/release/quadcl}
 [ -x "$bin" ] || { echo "$bin: no such binary (cargo build --release, or set QUADCL_BIN)" >&2; exit 1; }
 # name, the group the others are set against (paired by seed), whether the final checkpoints
 # are kept (sim2real fine-tunes sequence-12's), the sweep whose cells must all have finished
-# before this one's start (fig11-transfer reads the reference's curves). In the order the
-# workers take them: the long sequence-12 cells early, so that the last cells to run are short.
+# before this one is planned and started (fig11-transfer's plan names the reference's
+# metrics.json). In the order the workers take them: a dependent sweep after another, so that
+# no worker waits long for its dependency; the long sequence-12 cells early, so that the last
+# cells to run are short.
 sweeps=(
   "fig11-reference||0|"
-  "fig11-transfer|init=scratch|0|fig11-reference"
   "fig4-methods|name=ours|0|"
+  "fig11-transfer|init=scratch|0|fig11-reference"
   "sequence-12||1|"
   "fig5-selection|lambda=0.25|0|"
   "fig8-plasticity|reinit_scores=none reinit_weights=false|0|"
@@ -102,12 +104,25 @@ sim2real_seed() {
     mkdir -p "$out" && cp "$progress/sim2real/seed$seed/finetune.json" "$out/"
   fi
   [ -f "$out/finetune.json" ] && return 0
-  checkpoint=$(ls -d "$runs/$i"/checkpoints/step-11-* 2>/dev/null | head -n 1)
+  checkpoint=$(ls -d "$runs/$i"/checkpoints/step-11-* 2>/dev/null | head -n 1 || true)
   [ -n "$checkpoint" ] || { echo "sim2real: $runs/$i has no final checkpoint yet" >&2; return 1; }
   rm -rf "$out"
   mkdir -p runs/findings/sim2real
   RAYON_NUM_THREADS=$2 "$bin" finetune --policy "$checkpoint" --task crash:FL --shift "$shift_file" \
     --seed "$seed" --episodes 32 --out "$out"
+}
+
+# Sweep $1 planned into runs/findings/$1, with its finished cells kept in progress/ put back
+# ($2: whether they keep their checkpoints); a harvested sweep's committed files stand in.
+prepare() {
+  local name=$1 keep=$2 out=runs/findings/$1
+  # A harvested sweep is finished: its committed run files stand in (a later sweep may
+  # read them, as fig11-transfer reads the reference's metrics.json).
+  if [ ! -f "$out/sweep.json" ] && [ -f "policies/findings/$name/collected.md" ]; then
+    mkdir -p "$out" && cp -r "policies/findings/$name/." "$out/"
+  fi
+  [ -f "$out/sweep.json" ] || "$bin" sweep plan "scenes/findings/$name.toml" --out "$out" > /dev/null
+  if [ -d "$progress/$name" ]; then cells restore "$out" "$progress/$name" "$keep"; fi
 }
 
 # Whether every cell of runs/findings/$1 has finished; waits while any of them is running
@@ -127,28 +142,33 @@ sweep_finished() {
 # the workers train a sweep together, and one that finds no cell left moves on to the next
 # while the others finish theirs.
 worker() {
-  local entry name after
+  local entry name keep after rc=0
   for entry in "${sweeps[@]}"; do
-    IFS='|' read -r name _ _ after <<< "$entry"
-    [ -z "$after" ] || sweep_finished "$after"
+    IFS='|' read -r name _ keep after <<< "$entry"
+    if [ -n "$after" ]; then
+      # Its dependency unfinished: left for the next run, the other sweeps go on.
+      sweep_finished "$after" || { echo "$name: skipped, $after has not finished" >&2; rc=1; continue; }
+      # Planned once its dependency has finished, by the first worker here (not again by
+      # the next, which would put kept cells back under a running one).
+      ( flock 9 && { [ -f "runs/findings/$name/sweep.json" ] || prepare "$name" "$keep"; } ) \
+        9> runs/findings/.plan.lock
+    fi
     echo "== $name: worker $1 ($(date -u +%H:%M))"
-    "$bin" sweep local "runs/findings/$name" --jobs 1 --threads-per-job "$2"
+    # A failed cell (its log in the sweep's logs/ says why) leaves its sweep unfinished; the
+    # worker goes on with the next.
+    "$bin" sweep local "runs/findings/$name" --jobs 1 --threads-per-job "$2" || rc=1
   done
+  return "$rc"
 }
 
 case "${1:-}" in
   run)
     jobs=${2:-2} threads=${3:-1}
+    mkdir -p runs/findings
+    # Every sweep without a dependency planned now; the others by a worker, in turn.
     for entry in "${sweeps[@]}"; do
-      IFS='|' read -r name _ keep _ <<< "$entry"
-      out=runs/findings/$name
-      # A harvested sweep is finished: its committed run files stand in (a later sweep may
-      # read them, as fig11-transfer reads the reference's metrics.json).
-      if [ ! -f "$out/sweep.json" ] && [ -f "policies/findings/$name/collected.md" ]; then
-        mkdir -p "$out" && cp -r "policies/findings/$name/." "$out/"
-      fi
-      [ -f "$out/sweep.json" ] || "$bin" sweep plan "scenes/findings/$name.toml" --out "$out" > /dev/null
-      [ -d "$progress/$name" ] && cells restore "$out" "$progress/$name" "$keep"
+      IFS='|' read -r name _ keep after <<< "$entry"
+      [ -n "$after" ] || prepare "$name" "$keep"
     done
     pids=()
     for w in $(seq 1 "$jobs"); do
@@ -157,7 +177,6 @@ case "${1:-}" in
     done
     failed=0
     for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
-    [ "$failed" = 0 ] || { echo "a worker stopped on a failed cell (its sweep's logs/ say why); run again to resume" >&2; exit 1; }
     echo "== sim2real ($(date -u +%H:%M))"
     # The three fine-tunings side by side (short; on 2 cores three share them).
     pids=()
@@ -166,7 +185,7 @@ case "${1:-}" in
       pids+=($!)
     done
     for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
-    [ "$failed" = 0 ] || exit 1
+    [ "$failed" = 0 ] || { echo "not everything finished (see above: a failed cell, whose sweep's logs/ say why, a sweep not planned or skipped); run again to resume" >&2; exit 1; }
     ;;
   harvest)
     for entry in "${sweeps[@]}"; do

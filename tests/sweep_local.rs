@@ -115,14 +115,14 @@ fn two_sweeps_on_one_folder_share_its_cells_and_train_each_once() {
     std::fs::write(tmp.path().join("toy.toml"), RUN).unwrap();
     std::fs::write(tmp.path().join("sweep.toml"), SWEEP).unwrap();
     let dir = plan(tmp.path(), "shared");
-    // Started together, both list all four cells as to train before either starts one.
+    // Started together: each lists cells as to train that the other then starts.
     let sweeps: Vec<std::process::Child> = (0..2)
         .map(|_| {
             Command::new(env!("CARGO_BIN_EXE_quadcl"))
                 .args(["sweep", "local", "--jobs", "1", "--threads-per-job", "1"])
                 .arg(&dir)
                 .stdout(std::process::Stdio::piped())
-                .stderr(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
                 .spawn()
                 .unwrap()
         })
@@ -130,7 +130,7 @@ fn two_sweeps_on_one_folder_share_its_cells_and_train_each_once() {
     let mut finished_now = 0;
     for sweep in sweeps {
         let out = sweep.wait_with_output().unwrap();
-        assert!(out.status.success());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let report = String::from_utf8_lossy(&out.stdout).into_owned();
         finished_now += report.split(" cells finished now").next().unwrap().trim().parse::<usize>().unwrap();
     }

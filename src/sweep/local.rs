@@ -11,9 +11,10 @@
 //! file) before any starts. A child dies with the sweep (Linux: its parent-death
 //! signal), so a killed sweep leaves no orphan writing into a run folder; a cell
 //! whose marker names a live process (another `sweep local`) is left to it.
-//! Several `sweep local` on one folder share its cells: each checks a cell again
-//! under the folder's claim lock just before starting it, so none starts a cell
-//! another has started or finished since, and each runs until no cell is left.
+//! Several `sweep local` on one folder and machine share its cells: each checks a
+//! cell again under the folder's claim lock just before starting it, so none starts
+//! a cell another has started or finished since, and each runs until no cell is
+//! left; a cell's marker is changed at its end only while it still names that run.
 
 use super::marker::{hostname, read_marker, write_marker, ClaimLock, Marker};
 use super::plan::{Cell, Plan};
@@ -121,12 +122,22 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
             let done = running.swap_remove(i);
             let cell = &plan.cells[done.index];
             let secs = done.started.elapsed().as_secs_f64();
+            // The marker is ours to change only while it still names this run: once the run
+            // ended, another `sweep local` may have started the cell again (a failed one).
+            let _claim = ClaimLock::acquire(&dir)?;
+            let ours = read_marker(&dir, cell.index)
+                .is_some_and(|m| m == Marker::Running { pid: done.child.id(), host: hostname() });
             if status.success() && cell_finished(&dir, cell) {
-                write_marker(&dir, cell.index, None)?;
+                if ours {
+                    write_marker(&dir, cell.index, None)?;
+                }
                 say(&format!("cell {} ({}): finished in {secs:.1} s", cell.index, cell.name));
                 report.finished.push(cell.index);
             } else {
-                write_marker(&dir, cell.index, Some(&Marker::Failed { exit_code: status.code(), host: hostname() }))?;
+                if ours {
+                    let failed = Marker::Failed { exit_code: status.code(), host: hostname() };
+                    write_marker(&dir, cell.index, Some(&failed))?;
+                }
                 say(&format!(
                     "cell {} ({}): failed ({status}) after {secs:.1} s; see {}",
                     cell.index,

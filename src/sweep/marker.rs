@@ -55,9 +55,10 @@ pub fn write_marker(dir: &Path, index: usize, marker: Option<&Marker>) -> anyhow
 }
 
 /// The folder's claim lock (`DIR/state/claim.lock`, an exclusive `flock`), held while a
-/// `sweep local` checks that a cell is still free and starts it, so that several `sweep local`
-/// on one folder (on this machine, or on hosts sharing it where `flock` works across them)
-/// never start the same cell twice. Released when dropped.
+/// `sweep local` checks that a cell is still free and starts it (or changes its marker), so
+/// that several `sweep local` on one folder and machine never start the same cell twice (a
+/// marker from another host does not read as alive, so hosts sharing a folder do not share
+/// its cells this way). Released when dropped.
 pub struct ClaimLock {
     _file: std::fs::File,
 }
