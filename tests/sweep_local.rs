@@ -18,6 +18,14 @@ fn quadcl(args: &[&str], dir: &Path) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
+/// A folder holding the toy run file and the 2 x 2 sweep over it.
+fn toy_sweep() -> tempfile::TempDir {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("toy.toml"), RUN).unwrap();
+    std::fs::write(tmp.path().join("sweep.toml"), SWEEP).unwrap();
+    tmp
+}
+
 fn plan(tmp: &Path, name: &str) -> std::path::PathBuf {
     let dir = tmp.join(name);
     let out = Command::new(env!("CARGO_BIN_EXE_quadcl"))
@@ -50,9 +58,7 @@ fn completed(dir: &Path, cell: usize) -> usize {
 
 #[test]
 fn a_sweep_killed_and_run_again_collects_the_same_table_as_an_uninterrupted_one() {
-    let tmp = tempfile::tempdir().unwrap();
-    std::fs::write(tmp.path().join("toy.toml"), RUN).unwrap();
-    std::fs::write(tmp.path().join("sweep.toml"), SWEEP).unwrap();
+    let tmp = toy_sweep();
 
     let whole = plan(tmp.path(), "whole");
     quadcl(&["sweep", "local", "--jobs", "1"], &whole);
@@ -111,9 +117,7 @@ fn a_sweep_killed_and_run_again_collects_the_same_table_as_an_uninterrupted_one(
 
 #[test]
 fn two_sweeps_on_one_folder_share_its_cells_and_train_each_once() {
-    let tmp = tempfile::tempdir().unwrap();
-    std::fs::write(tmp.path().join("toy.toml"), RUN).unwrap();
-    std::fs::write(tmp.path().join("sweep.toml"), SWEEP).unwrap();
+    let tmp = toy_sweep();
     let dir = plan(tmp.path(), "shared");
     // Started together: each lists cells as to train that the other then starts.
     let sweeps: Vec<std::process::Child> = (0..2)

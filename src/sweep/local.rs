@@ -79,7 +79,7 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
     for cell in &plan.cells {
         if cell_finished(&dir, cell) {
             report.already_finished.push(cell.index);
-        } else if read_marker(&dir, cell.index).is_some_and(|m| m.is_alive()) {
+        } else if running_elsewhere(&dir, cell) {
             say(&format!("cell {} ({}): already running in another process, left to it", cell.index, cell.name));
             report.running_elsewhere.push(cell.index);
         } else {
@@ -102,7 +102,7 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
             // Another `sweep local` on this folder may have taken the cell since the list was
             // made: the check and the start happen under the folder's claim lock.
             let _claim = ClaimLock::acquire(&dir)?;
-            if cell_finished(&dir, cell) || read_marker(&dir, cell.index).is_some_and(|m| m.is_alive()) {
+            if cell_finished(&dir, cell) || running_elsewhere(&dir, cell) {
                 say(&format!("cell {} ({}): taken by another process, left to it", cell.index, cell.name));
                 report.running_elsewhere.push(cell.index);
                 continue;
@@ -151,6 +151,11 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
     report.finished.sort_unstable();
     report.failed.sort_unstable();
     Ok(report)
+}
+
+/// Whether a live run (this host's, by its marker) is training `cell`.
+fn running_elsewhere(dir: &Path, cell: &Cell) -> bool {
+    read_marker(dir, cell.index).is_some_and(|m| m.is_alive())
 }
 
 /// The log of cell `index`.
