@@ -12,7 +12,7 @@
 #                                                      in policies/findings/progress (commit it)
 #
 # Run folders: runs/findings/NAME. QUADCL_BIN picks the binary (default target/release/quadcl).
-# About 68,000 iterations in all: 12 h or more on 2 cores, an hour or two on 16.
+# About 80,000 iterations in all: 18 h or more on 2 cores, two or three hours on 16.
 # runs/ is not committed, so a fresh checkout has none of it: `save` keeps each finished cell's
 # metrics.json and log.txt (no checkpoints) with the run file it trained (the checkout's path
 # written as {repository}), and `run` puts them back into a newly planned sweep where the plan's
@@ -34,6 +34,7 @@ sweeps=(
   "sequence-12||1|"
   "fig5-selection|lambda=0.25|0|"
   "fig8-plasticity|reinit_scores=none reinit_weights=false|0|"
+  "fig4-budget|iterations=500 name=ours|0|"
 )
 shift_file=scenes/findings/sim2real.shift.toml
 progress=policies/findings/progress

@@ -1,6 +1,7 @@
 //! The findings' sweep files (issue 34, `scenes/findings/`) plan as their headers say: every
 //! cell's run file is checked (`sweep::check`, nothing written), and each sweep has its cells
-//! and at least three seeds per variant (the budget is the base file's, the same for all).
+//! and at least three seeds per variant (the budget is the base file's, or an axis of one
+//! value, the same for all).
 //! fig11-transfer measures forward transfer against fig11-reference's seed-1 run, so until
 //! that has run its planning is refused naming the missing file.
 
@@ -16,6 +17,7 @@ fn each_findings_sweep_plans_its_cells_with_three_seeds_per_variant() {
     for (name, cells, variants) in [
         ("sequence-12", 3, 1),
         ("fig4-methods", 30, 10),
+        ("fig4-budget", 6, 2),
         ("fig5-selection", 9, 3),
         ("fig8-plasticity", 12, 4),
         ("fig11-reference", 3, 1),
