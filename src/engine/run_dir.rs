@@ -147,6 +147,13 @@ impl RunDir {
         self.metrics_path().exists() || checkpoints
     }
 
+    /// Whether the folder holds a run's results but not the run: a `metrics.json` without
+    /// its `run.toml` (a harvested sweep keeps each cell so, with no checkpoints), which can
+    /// be read (`quadcl plot`, `sweep collect`) but not reopened or continued.
+    pub fn results_only(&self) -> bool {
+        self.metrics_path().exists() && !self.root.join(RUN_FILE).exists()
+    }
+
     /// Writes the checkpoint of step `step` (training `task`) as a whole
     /// (see [`replace_dir`]): the learner's state with the sequence's task names, its
     /// manifest stamped with `provenance`.

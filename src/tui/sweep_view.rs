@@ -5,7 +5,8 @@
 //! when the sweep went to Slurm, and `sweep::collect`, which writes nothing).
 //! The screen computes nothing itself. Enter on a cell that has a run asks for
 //! that run to be opened in the workbench ([`SweepView::open`]); a cell being
-//! trained right now is not opened (its `quadcl run` owns the folder).
+//! trained right now is not opened (its `quadcl run` owns the folder), nor is one kept as
+//! results only (a harvested sweep's: metrics.json and log.txt, nothing to continue from).
 
 use crate::sweep::{CellState, CellStatus, Collected};
 use std::path::{Path, PathBuf};
@@ -115,6 +116,10 @@ impl SweepView {
             CellState::Failed if !crate::engine::RunDir::new(&run).has_run() => {
                 format!("cell {index} failed before it recorded anything: see its log in logs/{index}.log")
             }
+            _ if crate::engine::RunDir::new(&run).results_only() => format!(
+                "cell {index} holds results only (no run file or checkpoint): see plots/ or retrain it from \
+                 cells/{index}.toml"
+            ),
             _ => {
                 self.open = Some(run);
                 format!("opening cell {index} ...")
@@ -158,5 +163,23 @@ mod tests {
         assert_eq!(view.cursor, 2, "the cursor stays on the last cell");
         view.update(SweepAction::Open);
         assert!(view.open.is_none() && view.message.as_deref().is_some_and(|m| m.contains("not started")));
+    }
+    #[test]
+    fn a_cell_kept_as_results_only_is_not_opened_and_the_screen_says_where_its_figures_are() {
+        let tmp = tempfile::tempdir().unwrap();
+        let run = tmp.path().join("runs/0");
+        std::fs::create_dir_all(&run).unwrap();
+        std::fs::write(run.join("metrics.json"), "{}").unwrap();
+        let mut view = SweepView::new(tmp.path().to_path_buf(), (120, 40));
+        let cells = vec![cell(0, CellState::Finished)];
+        view.update(SweepAction::Refresh(Box::new(SweepSnapshot { cells: Ok(cells), table: Err("none".into()) })));
+        view.update(SweepAction::Open);
+        assert!(view.open.is_none(), "a folder without its run file is not opened");
+        let message = view.message.clone().unwrap_or_default();
+        assert!(message.contains("results only") && message.contains("cells/0.toml"), "{message}");
+        // With its run file the same cell opens.
+        std::fs::write(run.join(crate::engine::RUN_FILE), "").unwrap();
+        view.update(SweepAction::Open);
+        assert_eq!(view.open.take(), Some(run));
     }
 }

@@ -92,6 +92,13 @@ pub struct Worker {
 fn open(spec: &OpenSpec) -> anyhow::Result<(Runner, String)> {
     let dir = &spec.run_dir;
     let shown = dir.display();
+    if crate::engine::RunDir::new(dir).results_only() {
+        anyhow::bail!(
+            "{shown} holds a run's results only (metrics.json, no {} or checkpoint): nothing to reopen; \
+             `quadcl plot {shown}` draws its figures",
+            crate::engine::RUN_FILE
+        );
+    }
     if has_run(dir) {
         // The folder's own run file: it has the tasks added in the workbench, which `config` lacks.
         let config = dir.join(crate::engine::RUN_FILE);

@@ -145,13 +145,18 @@ pub fn draw(f: &mut Frame, view: &SweepView) {
     lines.extend(view.cells.iter().enumerate().skip(scroll).map(|(i, c)| cell_line(c, i == view.cursor)));
     f.render_widget(Paragraph::new(lines).block(block("Cells", true)), cells);
     f.render_widget(Paragraph::new(table).block(block("Collected", false)), table_area);
-    let message = view.message.clone().unwrap_or_default();
-    f.render_widget(
-        Paragraph::new(Line::from(vec![
-            Span::styled(" ↑↓ select cell  enter open its run ", Style::new().fg(Color::Black).bg(Color::Gray)),
-            Span::raw("  q quit (in an opened run, q comes back)  "),
-            Span::styled(message, Style::new().fg(Color::Yellow)),
-        ])),
-        keys,
-    );
+    let chip = Style::new().fg(Color::Black).bg(Color::Gray);
+    // A message takes the line's room from the keys' explanations, which the chip still names.
+    let line = match &view.message {
+        Some(message) => Line::from(vec![
+            Span::styled(" ↑↓ enter q ", chip),
+            Span::raw("  "),
+            Span::styled(message.clone(), Style::new().fg(Color::Yellow)),
+        ]),
+        None => Line::from(vec![
+            Span::styled(" ↑↓ select cell  enter open its run ", chip),
+            Span::raw("  q quit (in an opened run, q comes back)"),
+        ]),
+    };
+    f.render_widget(Paragraph::new(line), keys);
 }
