@@ -8,6 +8,8 @@
 #   scripts/findings.sh harvest                        commit every finished sweep into
 #                                                      policies/findings/ (scripts/findings_harvest.sh)
 #   scripts/findings.sh status                         where every sweep stands
+#   scripts/findings.sh sim2real [THREADS]             the fine-tunings whose sequence-12 cell has
+#                                                      finished, now (short: a session's tail)
 #   scripts/findings.sh save                           keep the finished cells of unharvested sweeps
 #                                                      in policies/findings/progress (commit it)
 #
@@ -228,6 +230,16 @@ case "${1:-}" in
     done
     true
     ;;
+  sim2real)
+    # What `run` does last, for the seeds whose twelve-task policy is there already (kept in
+    # progress/ with its checkpoint): about 10 min each, so a session's last minutes, too short
+    # for a sweep's cell, still finish something. One at a time.
+    mkdir -p runs/findings
+    prepare sequence-12 1
+    failed=0
+    for i in 0 1 2; do sim2real_seed "$i" "${2:-1}" || failed=1; done
+    exit "$failed"
+    ;;
   status)
     for entry in "${sweeps[@]}"; do
       name=${entry%%|*}
@@ -242,7 +254,7 @@ case "${1:-}" in
     done
     ;;
   *)
-    sed -n '2,12p' "$0" >&2
+    sed -n '2,14p' "$0" >&2
     exit 2
     ;;
 esac
