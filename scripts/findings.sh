@@ -204,14 +204,20 @@ case "${1:-}" in
         QUADCL_BIN=$bin scripts/findings_harvest.sh "$name" "${args[@]}" || echo "$name: not harvested"
       fi
     done
-    # sim2real: each seed's report (every task before and after, on the shifted robot), not the policy.
+    # sim2real: each seed's report (every task before and after, on the shifted robot), not the
+    # policy, and their table over the seeds (`quadcl sweep finetunes`).
+    harvested=0
     for i in 1 2 3; do
       report=runs/findings/sim2real/seed$i/finetune.json
       [ -f "$report" ] || continue
       mkdir -p policies/findings/sim2real/seed$i
       cp "$report" policies/findings/sim2real/seed$i/
       cp "$shift_file" policies/findings/sim2real/
+      harvested=1
     done
+    if [ "$harvested" = 1 ]; then
+      "$bin" sweep finetunes policies/findings/sim2real
+    fi
     ;;
   save)
     for entry in "${sweeps[@]}"; do

@@ -4,7 +4,7 @@
 # metrics.json and log.txt (no checkpoints, unless --keep-checkpoints: a later
 # step reads them, as sim2real reads sequence-12's), then writes its tables and
 # figures there with the same commands a reader runs:
-#   quadcl sweep collect policies/findings/NAME --per-task [--against GROUP]
+#   quadcl sweep collect policies/findings/NAME --per-task --plasticity-trend [--against GROUP]
 #   quadcl plot policies/findings/NAME --out policies/findings/NAME/plots
 #
 #   scripts/findings_harvest.sh NAME [--against GROUP] [--keep-checkpoints] [--from DIR]
@@ -49,7 +49,7 @@ for run in "$from"/runs/*/; do
     cp -r "$run/checkpoints" "$stage/runs/$i/"
   fi
 done
-args=(--per-task)
+args=(--per-task --plasticity-trend)
 [ -n "$against" ] && args+=(--against "$against")
 "$bin" sweep collect "$stage" "${args[@]}" > /dev/null
 "$bin" plot "$stage" --out "$stage/plots" > /dev/null

@@ -5,7 +5,11 @@
 //! tables are computed and compared with the committed bytes.
 
 use quadcl::sweep::contrast::contrast_across;
-use quadcl::sweep::{collect, collect_tasks, contrast, contrast_markdown, markdown, tasks_markdown, Contrast};
+use quadcl::sweep::{
+    collect, collect_tasks, contrast, contrast_markdown, markdown, plasticity_trend, tasks_markdown, trend_markdown,
+    Contrast,
+};
+use quadcl::sweep::{finetunes, finetunes_markdown};
 use std::path::{Path, PathBuf};
 
 fn sweep_folders(dir: &Path, found: &mut Vec<PathBuf>) {
@@ -29,6 +33,35 @@ fn every_committed_sweeps_tables_are_what_collect_prints_from_its_run_files() {
     assert!(folders.len() >= 10, "only {} committed sweeps found under {}", folders.len(), root.display());
     for dir in folders {
         check_folder(&dir);
+    }
+}
+
+/// Folders under `dir` that hold fine-tuning reports (`NAME/finetune.json`, one per seed).
+fn finetune_folders(dir: &Path, found: &mut Vec<PathBuf>) {
+    let mut entries: Vec<PathBuf> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()).collect();
+    entries.sort();
+    if entries.iter().any(|e| e.join("finetune.json").is_file()) {
+        found.push(dir.to_path_buf());
+        return;
+    }
+    for e in entries {
+        finetune_folders(&e, found);
+    }
+}
+
+#[test]
+fn every_committed_fine_tuning_table_is_what_the_command_prints_from_its_reports() {
+    let mut folders = Vec::new();
+    finetune_folders(&Path::new(env!("CARGO_MANIFEST_DIR")).join("policies"), &mut folders);
+    for dir in folders {
+        let md = std::fs::read_to_string(dir.join("finetunes.md")).unwrap_or_else(|_| {
+            panic!("{}: fine-tuning reports without finetunes.md (quadcl sweep finetunes)", dir.display())
+        });
+        let table = finetunes(&dir).unwrap_or_else(|e| panic!("{}: {e:#}", dir.display()));
+        assert_eq!(md, finetunes_markdown(&table), "{}: finetunes.md differs", dir.display());
+        let json = std::fs::read_to_string(dir.join("finetunes.json")).unwrap();
+        assert_eq!(json, serde_json::to_string_pretty(&table).unwrap(), "{}", dir.display());
     }
 }
 
@@ -57,6 +90,13 @@ fn check_folder(dir: &Path) -> usize {
             assert_eq!(md, tasks_markdown(&tasks), "{}: collected-tasks.md differs", dir.display());
             let json = std::fs::read_to_string(dir.join("collected-tasks.json")).unwrap();
             assert_eq!(json, serde_json::to_string_pretty(&tasks).unwrap(), "{}", dir.display());
+        }
+        // Plasticity over the sequence, where the folder ships it (`--plasticity-trend`).
+        if let Ok(md) = std::fs::read_to_string(dir.join("plasticity-trend.md")) {
+            let trend = plasticity_trend(&dir).unwrap_or_else(|e| panic!("{}: {e:#}", dir.display()));
+            assert_eq!(md, trend_markdown(&trend), "{}: plasticity-trend.md differs", dir.display());
+            let json = std::fs::read_to_string(dir.join("plasticity-trend.json")).unwrap();
+            assert_eq!(json, serde_json::to_string_pretty(&trend).unwrap(), "{}", dir.display());
         }
         // The paired differences, against the baseline each shipped file names (`--against`,
         // in this folder or another: `contrast-vs-OTHER.json`).

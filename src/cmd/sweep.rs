@@ -1,4 +1,4 @@
-//! `quadcl sweep plan|local|slurm|status|collect`: grids of runs (see the
+//! `quadcl sweep plan|local|slurm|status|collect|finetunes`: grids of runs (see the
 //! library's `sweep` module for the folder they share).
 //!
 //! ```text
@@ -7,6 +7,7 @@
 //! quadcl sweep slurm runs/sweep-smoke --time 02:00:00 --cpus-per-task 4 --submit
 //! quadcl sweep status runs/sweep-smoke
 //! quadcl sweep collect runs/sweep-smoke
+//! quadcl sweep finetunes runs/findings/sim2real
 //! ```
 
 use clap::{Args, Subcommand};
@@ -31,6 +32,15 @@ pub enum SweepCommand {
     Status(StatusArgs),
     /// Per group of cells that differ only in seed: means with 90 % bootstrap intervals (DIR/collected.md, .json).
     Collect(CollectArgs),
+    /// Sim-to-real fine-tunings over seeds (DIR/*/finetune.json, one per seed): every task on the shifted
+    /// robot before and after, with intervals, and whether any other task changed (DIR/finetunes.md, .json).
+    Finetunes(FinetunesArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct FinetunesArgs {
+    /// The folder of the seeds' fine-tunings, each `quadcl finetune --out DIR/NAME`.
+    pub dir: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -95,6 +105,11 @@ pub struct CollectArgs {
     /// errors over the seeds (DIR/collected-tasks.md, .json).
     #[arg(long)]
     pub per_task: bool,
+    /// Also each group's plasticity (each task's performance right after its own training) step
+    /// by step, its first half of the steps against the second and its slope, paired within
+    /// each seed (DIR/plasticity-trend.md, .json).
+    #[arg(long)]
+    pub plasticity_trend: bool,
     /// Also every group minus this one, paired by seed, with intervals (DIR/contrast.md, .json):
     /// a group's name as the table prints it, or the parts that pick it out (`name=ours`).
     #[arg(long, value_name = "GROUP")]
@@ -209,11 +224,30 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                     a.dir.join(sweep::per_task::COLLECTED_TASKS_JSON).display()
                 );
             }
+            if a.plasticity_trend {
+                let trend = sweep::plasticity_trend_and_write(&a.dir)?;
+                print!("\n{}", sweep::trend_markdown(&trend));
+                println!(
+                    "\nwritten to {} and {}",
+                    a.dir.join(sweep::plasticity_trend::PLASTICITY_TREND_MD).display(),
+                    a.dir.join(sweep::plasticity_trend::PLASTICITY_TREND_JSON).display()
+                );
+            }
             if let Some(c) = contrast {
                 let (md, json) = sweep::contrast::write_contrast(&a.dir, &c)?;
                 print!("\n{}", sweep::contrast_markdown(&c));
                 println!("\nwritten to {} and {}", md.display(), json.display());
             }
+            Ok(())
+        }
+        SweepCommand::Finetunes(a) => {
+            let table = sweep::finetunes_and_write(&a.dir)?;
+            print!("{}", sweep::finetunes_markdown(&table));
+            println!(
+                "\nwritten to {} and {}",
+                a.dir.join(sweep::finetunes::FINETUNES_MD).display(),
+                a.dir.join(sweep::finetunes::FINETUNES_JSON).display()
+            );
             Ok(())
         }
     }
