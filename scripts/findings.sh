@@ -103,9 +103,12 @@ EOF
 sim2real_seed() {
   local i=$1 seed=$(($1 + 1)) runs=runs/findings/sequence-12/runs
   local out=runs/findings/sim2real/seed$seed checkpoint
-  if [ ! -f "$out/finetune.json" ] && [ -f "$progress/sim2real/seed$seed/finetune.json" ]; then
-    mkdir -p "$out" && cp "$progress/sim2real/seed$seed/finetune.json" "$out/"
-  fi
+  # A committed report (harvested, or kept by `save`) stands in for the fine-tuning.
+  for kept in "policies/findings/sim2real/seed$seed" "$progress/sim2real/seed$seed"; do
+    if [ ! -f "$out/finetune.json" ] && [ -f "$kept/finetune.json" ]; then
+      mkdir -p "$out" && cp "$kept/finetune.json" "$out/"
+    fi
+  done
   [ -f "$out/finetune.json" ] && return 0
   checkpoint=$(ls -d "$runs/$i"/checkpoints/step-11-* 2>/dev/null | head -n 1 || true)
   [ -n "$checkpoint" ] || { echo "sim2real: $runs/$i has no final checkpoint yet" >&2; return 1; }
@@ -232,8 +235,11 @@ case "${1:-}" in
     done
     for i in 1 2 3; do
       report=runs/findings/sim2real/seed$i/finetune.json
+      # A harvested seed's report is committed in policies/findings/sim2real already.
+      [ -f "policies/findings/sim2real/seed$i/finetune.json" ] && { rm -rf "${progress:?}/sim2real/seed$i"; continue; }
       [ -f "$report" ] && mkdir -p "$progress/sim2real/seed$i" && cp "$report" "$progress/sim2real/seed$i/"
     done
+    rmdir "$progress/sim2real" 2>/dev/null || true
     true
     ;;
   sim2real)
@@ -256,7 +262,13 @@ case "${1:-}" in
       fi
     done
     for i in 1 2 3; do
-      [ -f "runs/findings/sim2real/seed$i/finetune.json" ] && echo "sim2real seed $i: done" || echo "sim2real seed $i: not run"
+      if [ -f "policies/findings/sim2real/seed$i/finetune.json" ]; then
+        echo "sim2real seed $i: done, harvested"
+      elif [ -f "runs/findings/sim2real/seed$i/finetune.json" ]; then
+        echo "sim2real seed $i: done"
+      else
+        echo "sim2real seed $i: not run"
+      fi
     done
     ;;
   *)
