@@ -210,27 +210,19 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             };
             sweep::collect::write_collected(&a.dir, &table)?;
             print!("{}", sweep::markdown(&table));
-            println!(
-                "\nwritten to {} and {}",
-                a.dir.join(sweep::COLLECTED_MD).display(),
-                a.dir.join(sweep::COLLECTED_JSON).display()
-            );
+            say_written(&a.dir, sweep::COLLECTED_MD, sweep::COLLECTED_JSON);
             if a.per_task {
                 let tasks = sweep::collect_tasks_and_write(&a.dir)?;
                 print!("\n{}", sweep::tasks_markdown(&tasks));
-                println!(
-                    "\nwritten to {} and {}",
-                    a.dir.join(sweep::per_task::COLLECTED_TASKS_MD).display(),
-                    a.dir.join(sweep::per_task::COLLECTED_TASKS_JSON).display()
-                );
+                say_written(&a.dir, sweep::per_task::COLLECTED_TASKS_MD, sweep::per_task::COLLECTED_TASKS_JSON);
             }
             if a.plasticity_trend {
                 let trend = sweep::plasticity_trend_and_write(&a.dir)?;
                 print!("\n{}", sweep::trend_markdown(&trend));
-                println!(
-                    "\nwritten to {} and {}",
-                    a.dir.join(sweep::plasticity_trend::PLASTICITY_TREND_MD).display(),
-                    a.dir.join(sweep::plasticity_trend::PLASTICITY_TREND_JSON).display()
+                say_written(
+                    &a.dir,
+                    sweep::plasticity_trend::PLASTICITY_TREND_MD,
+                    sweep::plasticity_trend::PLASTICITY_TREND_JSON,
                 );
             }
             if let Some(c) = contrast {
@@ -243,14 +235,15 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         SweepCommand::Finetunes(a) => {
             let table = sweep::finetunes_and_write(&a.dir)?;
             print!("{}", sweep::finetunes_markdown(&table));
-            println!(
-                "\nwritten to {} and {}",
-                a.dir.join(sweep::finetunes::FINETUNES_MD).display(),
-                a.dir.join(sweep::finetunes::FINETUNES_JSON).display()
-            );
+            say_written(&a.dir, sweep::finetunes::FINETUNES_MD, sweep::finetunes::FINETUNES_JSON);
             Ok(())
         }
     }
+}
+
+/// The line after a printed table: the two files in `dir` it was written to.
+fn say_written(dir: &std::path::Path, md: &str, json: &str) {
+    println!("\nwritten to {} and {}", dir.join(md).display(), dir.join(json).display());
 }
 
 /// `to` relative to the folder `from` (both must exist), as `../fig5-selection`.

@@ -37,17 +37,36 @@ pub struct RunMeasures {
     pub summary: Summary,
 }
 
+/// Reads the `metrics.json` of the run folder `run` as `T` (the fields `T` names); Ok(None)
+/// when there is none yet.
+pub fn load_metrics<T: serde::de::DeserializeOwned>(run: &Path) -> anyhow::Result<Option<T>> {
+    let path = run.join(METRICS_FILE);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let m =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))?;
+    Ok(Some(m))
+}
+
+/// [`load_metrics`] of a run that trained its whole sequence; Ok(None) also while it has steps left.
+pub fn load_finished<T: serde::de::DeserializeOwned>(run: &Path) -> anyhow::Result<Option<T>> {
+    #[derive(Deserialize)]
+    struct Progress {
+        completed_steps: usize,
+        total_steps: usize,
+    }
+    match load_metrics::<Progress>(run)? {
+        Some(p) if p.total_steps > 0 && p.completed_steps == p.total_steps => load_metrics(run),
+        _ => Ok(None),
+    }
+}
+
 impl RunMeasures {
     /// Reads the `metrics.json` of the run folder `run`; Ok(None) when there is none yet.
     pub fn load(run: &Path) -> anyhow::Result<Option<Self>> {
-        let path = run.join(METRICS_FILE);
-        if !path.exists() {
-            return Ok(None);
-        }
-        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-        let m = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))?;
-        Ok(Some(m))
+        load_metrics(run)
     }
 
     /// Whether the run trained its whole sequence.

@@ -9,11 +9,10 @@
 //! that falls).
 
 use super::bootstrap::{estimate, Estimate, CONFIDENCE, RESAMPLES};
-use super::collect::estimate_text;
+use super::collect::{estimate_text, load_finished};
 use super::plan::Plan;
-use crate::engine::METRICS_FILE;
 use crate::util::write_atomic;
-use anyhow::{ensure, Context};
+use anyhow::ensure;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -35,8 +34,6 @@ pub const TASK_MEASURES: [(&str, &str); 5] = [
 /// What the per-task table reads of a run's `metrics.json`.
 #[derive(Debug, Deserialize)]
 struct RunTasks {
-    completed_steps: usize,
-    total_steps: usize,
     eval_matrix: Matrix,
     forgetting_per_task: Vec<Option<f64>>,
     command_tracking: Tracking,
@@ -56,18 +53,6 @@ struct Tracking {
 }
 
 impl RunTasks {
-    /// The finished run in folder `run`, or None (no metrics.json yet, or not finished).
-    fn load(run: &Path) -> anyhow::Result<Option<Self>> {
-        let path = run.join(METRICS_FILE);
-        if !path.exists() {
-            return Ok(None);
-        }
-        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-        let r: Self = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))?;
-        Ok((r.total_steps > 0 && r.completed_steps == r.total_steps).then_some(r))
-    }
-
     /// The value of `key` (one of [`TASK_MEASURES`]) for distinct task `j`.
     fn value(&self, key: &str, j: usize) -> Option<f64> {
         let at = |v: &[Option<f64>]| v.get(j).copied().flatten();
@@ -119,7 +104,7 @@ pub fn collect_tasks(dir: &Path) -> anyhow::Result<CollectedTasks> {
         let mut runs: Vec<(String, RunTasks)> = Vec::new();
         for &i in &indices {
             let folder = &plan.cells[i].run;
-            if let Some(r) = RunTasks::load(&dir.join(folder))? {
+            if let Some(r) = load_finished::<RunTasks>(&dir.join(folder))? {
                 if let Some((first, f)) = runs.first() {
                     ensure!(
                         r.eval_matrix.tasks == f.eval_matrix.tasks,

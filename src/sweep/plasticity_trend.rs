@@ -17,11 +17,10 @@
 //! decides which tasks fall in which half.
 
 use super::bootstrap::{estimate, Estimate, CONFIDENCE, RESAMPLES};
-use super::collect::{aligned_table, estimate_text};
+use super::collect::{aligned_table, estimate_text, load_finished};
 use super::plan::Plan;
-use crate::engine::METRICS_FILE;
 use crate::util::write_atomic;
-use anyhow::{ensure, Context};
+use anyhow::ensure;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -33,8 +32,6 @@ pub const PLASTICITY_TREND_JSON: &str = "plasticity-trend.json";
 /// What the trend reads of a run's `metrics.json`.
 #[derive(Debug, Deserialize)]
 struct RunMatrix {
-    completed_steps: usize,
-    total_steps: usize,
     eval_matrix: Matrix,
 }
 
@@ -46,18 +43,6 @@ struct Matrix {
 }
 
 impl RunMatrix {
-    /// The finished run in folder `run`, or None (no metrics.json yet, or not finished).
-    fn load(run: &Path) -> anyhow::Result<Option<Self>> {
-        let path = run.join(METRICS_FILE);
-        if !path.exists() {
-            return Ok(None);
-        }
-        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-        let r: Self = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))?;
-        Ok((r.total_steps > 0 && r.completed_steps == r.total_steps).then_some(r))
-    }
-
     /// The tasks trained, step by step.
     fn trained_tasks(&self) -> Vec<String> {
         self.eval_matrix.trained.iter().map(|&j| self.eval_matrix.tasks.get(j).cloned().unwrap_or_default()).collect()
@@ -161,7 +146,7 @@ pub fn plasticity_trend(dir: &Path) -> anyhow::Result<PlasticityTrend> {
         let mut sequence: Option<(String, Vec<String>)> = None;
         for &i in &indices {
             let folder = &plan.cells[i].run;
-            let Some(r) = RunMatrix::load(&dir.join(folder))? else { continue };
+            let Some(r) = load_finished::<RunMatrix>(&dir.join(folder))? else { continue };
             let tasks = r.trained_tasks();
             match &sequence {
                 Some((first, expected)) => ensure!(
