@@ -22,8 +22,8 @@
 //! `sweep.json`), [`local`] (child processes here), [`slurm`] (array jobs), [`marker`] (what a
 //! local runner says about a cell), [`status`](mod@status) (where every cell stands),
 //! [`bootstrap`] (means and intervals), [`collect`](mod@collect) (the table), [`per_task`]
-//! (its groups task by task), [`plasticity_trend`] (plasticity over the sequence) and
-//! [`contrast`](mod@contrast) (groups against one, paired by seed).
+//! (its groups task by task), [`plasticity_trend`](mod@plasticity_trend) (plasticity over the
+//! sequence) and [`contrast`](mod@contrast) (groups against one, paired by seed).
 //!
 //! Not a sweep but collected alike: [`finetunes`](mod@finetunes), the sim-to-real fine-tunings of
 //! one task over seeds (a folder of `quadcl finetune --out` folders, one per seed; `quadcl
