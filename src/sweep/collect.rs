@@ -37,29 +37,41 @@ pub struct RunMeasures {
     pub summary: Summary,
 }
 
-/// Reads the `metrics.json` of the run folder `run` as `T` (the fields `T` names); Ok(None)
-/// when there is none yet.
-pub fn load_metrics<T: serde::de::DeserializeOwned>(run: &Path) -> anyhow::Result<Option<T>> {
+/// The `metrics.json` of the run folder `run` (its path and text); Ok(None) when there is none yet.
+fn read_metrics(run: &Path) -> anyhow::Result<Option<(std::path::PathBuf, String)>> {
     let path = run.join(METRICS_FILE);
     if !path.exists() {
         return Ok(None);
     }
     let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let m =
-        serde_json::from_str(&text).with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))?;
-    Ok(Some(m))
+    Ok(Some((path, text)))
 }
 
-/// [`load_metrics`] of a run that trained its whole sequence; Ok(None) also while it has steps left.
+/// `text`, the `metrics.json` at `path`, as `T` (the fields `T` names).
+fn parse_metrics<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> anyhow::Result<T> {
+    serde_json::from_str(text).with_context(|| format!("{}: not a quadcl run's metrics.json", path.display()))
+}
+
+/// Reads the `metrics.json` of the run folder `run` as `T` (the fields `T` names); Ok(None)
+/// when there is none yet.
+pub fn load_metrics<T: serde::de::DeserializeOwned>(run: &Path) -> anyhow::Result<Option<T>> {
+    read_metrics(run)?.map(|(path, text)| parse_metrics(&path, &text)).transpose()
+}
+
+/// [`load_metrics`] of a run that trained its whole sequence; Ok(None) also while it has steps
+/// left. The file (megabytes for a long sequence) is read once.
 pub fn load_finished<T: serde::de::DeserializeOwned>(run: &Path) -> anyhow::Result<Option<T>> {
     #[derive(Deserialize)]
     struct Progress {
         completed_steps: usize,
         total_steps: usize,
     }
-    match load_metrics::<Progress>(run)? {
-        Some(p) if p.total_steps > 0 && p.completed_steps == p.total_steps => load_metrics(run),
-        _ => Ok(None),
+    let Some((path, text)) = read_metrics(run)? else { return Ok(None) };
+    let p: Progress = parse_metrics(&path, &text)?;
+    if p.total_steps > 0 && p.completed_steps == p.total_steps {
+        parse_metrics(&path, &text).map(Some)
+    } else {
+        Ok(None)
     }
 }
 
