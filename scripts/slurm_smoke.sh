@@ -16,7 +16,9 @@
 #    `quadcl sweep slurm --submit`, checks that `quadcl sweep status` sees the
 #    cells queued or running (squeue), waits for the array, collects it,
 #    and checks the table: two groups of two finished seeds, each mean inside its
-#    interval, every run's provenance naming its cell's run file.
+#    interval, every run's provenance naming its cell's run file. The sweep's
+#    folder is named "my sweep's dir": its #SBATCH lines must carry the space and
+#    the quote, and every cell's log must land in its logs/.
 # 4. Stops only the daemons it started (by their process ids) and removes its folder.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -50,7 +52,7 @@ stop() {
     wait "${pids[$i]}" 2>/dev/null || true
   done
   if [ $rc -ne 0 ]; then
-    for log in "$tmp"/*.log "$tmp"/*.out "$tmp"/sweep/logs/*.log; do
+    for log in "$tmp"/*.log "$tmp"/*.out "$tmp"/*/logs/*.log; do
       [ -f "$log" ] && { echo "--- $log"; tail -n 20 "$log"; }
     done
   fi
@@ -118,7 +120,9 @@ done
 [ "$state" = idle ] || { echo "the node did not come up (sinfo: ${state:-no answer})" >&2; exit 1; }
 echo "a one-node cluster on $host: $cpus CPUs, ${memory} MB"
 
-sweep="$tmp/sweep"
+# The sweep's folder holds a space and a single quote: its #SBATCH --output must reach sbatch's
+# directive reader as one path, and the logs must land in it (sweep status reads them there).
+sweep="$tmp/my sweep's dir"
 "$bin" sweep plan scenes/sweep-smoke.toml --out "$sweep"
 submitted=$("$bin" sweep slurm "$sweep" --cpus-per-task 1 --time 00:20:00 --submit)
 echo "$submitted"
@@ -152,9 +156,12 @@ for g in table["groups"]:
     assert e["n"] == 2 and e["low"] <= e["mean"] <= e["high"], e
     assert g["measures"]["forgetting"]["mean"] == 0.0, g["measures"]["forgetting"]
     assert [c["seed"] for c in g["cells"]] == [1, 2], g["cells"]
+import os
 for c in plan["cells"]:
+    log = f"{d}/logs/{c['index']}.log"
+    assert os.path.getsize(log) > 0, f"no log at {log}: the #SBATCH --output did not reach the sweep's folder"
     m = json.load(open(f"{d}/{c['run']}/metrics.json"))
     assert m["provenance"]["run_file_sha256"] == c["run_file_sha256"], c["index"]
     assert m["provenance"]["threads"] == 1, m["provenance"]
-print("slurm smoke: the table of 2 x 2 cells is complete and consistent")
+print(f"slurm smoke: the table of 2 x 2 cells in {d!r} is complete and consistent, every log in its logs/")
 PY

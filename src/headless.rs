@@ -33,43 +33,107 @@ impl Observer for ProgressObserver {
 }
 
 /// Every iteration's metrics and the measures after each task as TensorBoard runs.
+///
+/// A write that fails is said once per folder, with what happens next: a task's folder
+/// that cannot be written loses that task's curves only (its writer is closed before the
+/// next task's opens, so no task's curves go into another's folder); `tb/sequence` that
+/// cannot be written stops the sequence's curves for the rest of the run. Training goes on
+/// either way: the curves are a record, `metrics.json` holds the results.
 struct TensorBoardObserver {
     root: PathBuf,
     /// The run's iterations so far (the sequence axis: the last one's step).
     done: i64,
-    sequence: ScalarLog,
+    /// None once a write to it failed.
+    sequence: Option<ScalarLog>,
+    /// The task in progress's writer; None before the first task, or when its folder failed.
     task: Option<ScalarLog>,
-    /// The first failure, reported once (training goes on: the curves are a record, not a result).
-    failed: bool,
+    /// The task in progress's folder (named in a warning).
+    task_dir: PathBuf,
 }
 
 impl TensorBoardObserver {
     /// `done` iterations of the run are complete (a resume starts there).
     fn open(root: &Path, done: usize) -> anyhow::Result<Self> {
         let sequence = ScalarLog::after(&root.join("sequence"), done)?;
-        Ok(Self { root: root.to_path_buf(), done: done as i64, sequence, task: None, failed: false })
+        Ok(Self {
+            root: root.to_path_buf(),
+            done: done as i64,
+            sequence: Some(sequence),
+            task: None,
+            task_dir: root.into(),
+        })
     }
 
-    fn handle(&mut self, event: &Event) -> anyhow::Result<()> {
+    /// The task in progress's writer failed: its curves stop until the next task.
+    fn task_failed(&mut self, e: &anyhow::Error) {
+        if self.task.take().is_some() {
+            tracing::warn!(
+                "{}: TensorBoard curves of this task stopped ({}); the next task writes its own folder again",
+                self.task_dir.display(),
+                crate::util::text::error_text(e)
+            );
+        }
+    }
+
+    /// The sequence's writer failed: its curves stop for the rest of the run.
+    fn sequence_failed(&mut self, e: &anyhow::Error) {
+        if self.sequence.take().is_some() {
+            tracing::warn!(
+                "{}: TensorBoard curves of the whole sequence stopped for the rest of the run ({}); each task's \
+                 folder goes on",
+                self.root.join("sequence").display(),
+                crate::util::text::error_text(e)
+            );
+        }
+    }
+
+    /// Writes to the sequence's log while it works.
+    fn to_sequence(&mut self, write: impl FnOnce(&mut ScalarLog) -> anyhow::Result<()>) {
+        if let Some(sequence) = &mut self.sequence {
+            if let Err(e) = write(sequence) {
+                self.sequence_failed(&e);
+            }
+        }
+    }
+
+    /// Writes to the task in progress's log while it works.
+    fn to_task(&mut self, write: impl FnOnce(&mut ScalarLog) -> anyhow::Result<()>) {
+        if let Some(task) = &mut self.task {
+            if let Err(e) = write(task) {
+                self.task_failed(&e);
+            }
+        }
+    }
+}
+
+impl Observer for TensorBoardObserver {
+    fn on_event(&mut self, event: &Event) {
         match event {
             Event::TaskStarted { step, name, .. } => {
+                // The previous task's writer is flushed and closed before this one opens.
+                self.to_task(|t| t.flush());
+                self.task = None;
                 // A task redone after a resume starts its folder anew.
-                let dir = self.root.join(format!("{step:02}-{}", task_file_name(name)));
-                self.task = Some(ScalarLog::create(&dir)?);
+                self.task_dir = self.root.join(format!("{step:02}-{}", task_file_name(name)));
+                match ScalarLog::create(&self.task_dir) {
+                    Ok(log) => self.task = Some(log),
+                    Err(e) => tracing::warn!(
+                        "{}: cannot write this task's TensorBoard curves ({}); the next task writes its own folder again",
+                        self.task_dir.display(),
+                        crate::util::text::error_text(&e)
+                    ),
+                }
             }
             Event::Iteration { iteration, metrics, .. } => {
                 let scalars = || metrics.iter().map(|(k, v)| (k.as_str(), *v));
-                if let Some(task) = &mut self.task {
-                    task.write(*iteration as i64, scalars())?;
-                }
+                self.to_task(|t| t.write(*iteration as i64, scalars()));
                 self.done += 1;
-                self.sequence.write(self.done, scalars())?;
+                let done = self.done;
+                self.to_sequence(|s| s.write(done, scalars()));
             }
             Event::TaskEnded { .. } => {
-                self.sequence.flush()?;
-                if let Some(task) = &mut self.task {
-                    task.flush()?;
-                }
+                self.to_sequence(|s| s.flush());
+                self.to_task(|t| t.flush());
             }
             Event::Evaluated { evaluation, .. } => {
                 let name = &evaluation.report.task;
@@ -79,7 +143,8 @@ impl TensorBoardObserver {
                     (format!("eval/{name}/ang_vel_err"), evaluation.report.ang_vel_err),
                     (format!("eval/{name}/fall_rate"), evaluation.report.fall_rate),
                 ];
-                self.sequence.write(self.done, tags.iter().map(|(t, v)| (t.as_str(), *v)))?;
+                let done = self.done;
+                self.to_sequence(|s| s.write(done, tags.iter().map(|(t, v)| (t.as_str(), *v))));
             }
             Event::Measures { summary, .. } => {
                 let measures = [
@@ -88,22 +153,13 @@ impl TensorBoardObserver {
                     ("eval/plasticity", summary.plasticity),
                     ("eval/forward_transfer", summary.forward_transfer_mean),
                 ];
-                self.sequence.write(self.done, measures.iter().filter_map(|(t, v)| v.map(|v| (*t, v))))?;
-                self.sequence.flush()?;
+                let done = self.done;
+                self.to_sequence(|s| {
+                    s.write(done, measures.iter().filter_map(|(t, v)| v.map(|v| (*t, v))))?;
+                    s.flush()
+                });
             }
             _ => {}
-        }
-        Ok(())
-    }
-}
-
-impl Observer for TensorBoardObserver {
-    fn on_event(&mut self, event: &Event) {
-        if let Err(e) = self.handle(event) {
-            if !self.failed {
-                tracing::warn!("{}: TensorBoard logging stopped: {e:#}", self.root.display());
-                self.failed = true;
-            }
         }
     }
 }
@@ -129,6 +185,17 @@ pub struct RunOptions {
 /// Runs (or, with `resume`, continues) the run file `config` into `out`.
 /// Every check (config, existing results, checkpoint) happens before anything is written.
 pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<MetricsFile> {
+    run_then(config, out, options, |_| {})
+}
+
+/// [`run`], then `after` with the results while the run still holds its folder's lock (so
+/// that what it writes there, the figures of `quadcl run`, is not raced by a second process).
+pub fn run_then(
+    config: &Path,
+    out: &Path,
+    options: RunOptions,
+    after: impl FnOnce(&MetricsFile),
+) -> anyhow::Result<MetricsFile> {
     let RunOptions { resume, progress, stop_after, record, method, no_tensorboard } = options;
     // A folder that holds no run yet (never started, or killed before its first record) starts
     // it: a Slurm array task or a sweep cell is always started with --resume.
@@ -147,5 +214,7 @@ pub fn run(config: &Path, out: &Path, options: RunOptions) -> anyhow::Result<Met
         runner.session_mut().add_observer(Box::new(tb));
     }
     runner.train(stop_after)?;
-    Ok(runner.metrics())
+    let metrics = runner.metrics();
+    after(&metrics);
+    Ok(metrics)
 }

@@ -57,7 +57,8 @@ fn main() -> std::process::ExitCode {
     match cli::dispatch(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            // Each cause once, no value echoed whole (see quadcl::util::text::error_text).
+            eprintln!("error: {}", quadcl::util::text::error_text(&err));
             std::process::ExitCode::FAILURE
         }
     }

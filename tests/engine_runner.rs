@@ -77,6 +77,8 @@ fn a_runner_serves_on_its_own_thread_waits_while_paused_and_keeps_added_tasks() 
 
     let text = std::fs::read_to_string(out.join("run.toml")).unwrap();
     assert!(text.contains("invert:RR+noise:FR"), "{text}");
+    // The folder is one process's at a time: the runner lets it go before it is reopened.
+    drop(runner);
     let reopened = Runner::open(&out.join("run.toml"), &out, OpenMode::ResumeOrNew, false).unwrap();
     assert_eq!(reopened.session().sequence().tasks.len(), 3);
     assert_eq!(reopened.session().completed_steps(), done, "every finished task is kept");
@@ -162,6 +164,7 @@ fn a_longer_sequence_continues_a_shorter_run_without_touching_it() {
     assert_eq!(runner.train(None).unwrap(), StepOutcome::SequenceDone);
     assert_eq!(runner.metrics().summary.forgetting, Some(0.0));
     assert_eq!(std::fs::read(prior.join("metrics.json")).unwrap(), before, "the prior run is only read");
+    drop(runner);
     let reopened = Runner::open(&out.join("run.toml"), &out, OpenMode::ResumeOrNew, false).unwrap();
     assert!(reopened.session().is_done());
 
@@ -186,6 +189,7 @@ fn settings_chosen_for_the_next_step_survive_a_reopen_and_an_interrupted_step_re
     runner.session_mut().stop();
     runner.serve().unwrap();
     assert!(a.join("next-step.json").exists());
+    drop(runner);
     let mut runner = Runner::open(&cfg, &a, OpenMode::Resume, false).unwrap();
     assert_eq!(runner.session().queued_switches(), &change);
     assert_eq!(runner.session().queued_transfer(), Some(&related));
@@ -205,6 +209,7 @@ fn settings_chosen_for_the_next_step_survive_a_reopen_and_an_interrupted_step_re
     runner.session_mut().step_iteration().unwrap();
     runner.session_mut().stop();
     runner.serve().unwrap();
+    drop(runner);
     let mut runner = Runner::open(&cfg, &b, OpenMode::Resume, false).unwrap();
     assert_eq!(runner.session().completed_steps(), 1);
     assert_eq!(runner.train(None).unwrap(), StepOutcome::SequenceDone);
@@ -224,6 +229,7 @@ fn a_start_interrupted_before_metrics_json_is_started_again_but_a_run_is_never_o
     let mut runner = Runner::open(&cfg, &out, OpenMode::ResumeOrNew, false).unwrap();
     assert_eq!(runner.session().completed_steps(), 0, "nothing was there: a new run");
     runner.train(Some(1)).unwrap();
+    drop(runner);
     let before = std::fs::read(out.join("metrics.json")).unwrap();
     let err = Runner::open(&cfg, &out, OpenMode::New, false).err().unwrap();
     assert!(format!("{err:#}").contains("already holds a run"), "{err:#}");

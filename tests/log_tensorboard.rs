@@ -98,3 +98,26 @@ fn a_resumed_run_reads_back_as_the_run_that_never_stopped() {
     run(&cfg, &quiet, RunOptions { no_tensorboard: true, ..Default::default() }).unwrap();
     assert!(!quiet.join("tb").exists());
 }
+
+#[test]
+fn a_task_whose_folder_cannot_be_written_files_no_curve_under_another_task() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("run.toml");
+    std::fs::write(&cfg, RUN).unwrap();
+    let out = tmp.path().join("out");
+    // A file in the way of the second task's folder.
+    std::fs::create_dir_all(out.join("tb")).unwrap();
+    std::fs::write(out.join("tb/01-invert_RR"), "in the way").unwrap();
+    let m = run(&cfg, &out, RunOptions::default()).unwrap();
+    assert_eq!(m.completed_steps, 3, "training goes on");
+    for (folder, iterations) in [("00-crash_FL", 5), ("02-noise_FR", 5)] {
+        let perf = &tb(&out, folder)["charts/performance"];
+        let steps: Vec<i64> = perf.iter().map(|(s, _)| *s).collect();
+        assert_eq!(steps, (1..=iterations).collect::<Vec<_>>(), "{folder} holds its own task's iterations only");
+        let csv = std::fs::read_to_string(out.join("tb").join(folder).join(CSV_FILE)).unwrap();
+        assert_eq!(csv.lines().filter(|l| l.contains(",charts/performance,")).count(), iterations as usize);
+    }
+    assert_eq!(std::fs::read_to_string(out.join("tb/01-invert_RR")).unwrap(), "in the way");
+    // The sequence's curves go on through all three tasks.
+    assert_eq!(tb(&out, "sequence")["charts/performance"].last().unwrap().0, 17);
+}

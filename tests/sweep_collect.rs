@@ -51,3 +51,81 @@ fn the_fixture_collects_into_the_known_means_and_intervals() {
     // The same table every time.
     assert_eq!(collect(fixture()).unwrap(), table);
 }
+
+/// A copy of the fixture to change.
+fn fixture_copy() -> tempfile::TempDir {
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = |from: &Path, to: &Path| {
+        for entry in walk(from) {
+            let target = to.join(entry.strip_prefix(from).unwrap());
+            std::fs::create_dir_all(target.parent().unwrap()).unwrap();
+            std::fs::copy(&entry, &target).unwrap();
+        }
+    };
+    copy(fixture(), tmp.path());
+    tmp
+}
+
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            files.extend(walk(&path));
+        } else {
+            files.push(path);
+        }
+    }
+    files
+}
+
+/// Cell `cell`'s metrics.json with its provenance recording `run_file_sha256`.
+fn record_run_file(dir: &Path, cell: usize, run_file_sha256: &str) {
+    let path = dir.join(format!("runs/{cell}/metrics.json"));
+    let mut m: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    m["provenance"] = serde_json::json!({
+        "quadcl_version": "0.1.0", "git_commit": "unknown", "git_dirty": null,
+        "run_file_sha256": run_file_sha256, "cores": 2, "threads": 2
+    });
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+}
+
+#[test]
+fn a_foreign_cell_is_left_out_by_collect_and_named_by_status() {
+    let tmp = fixture_copy();
+    let dir = tmp.path();
+    let planned = quadcl::sweep::Plan::load(dir).unwrap().cells[0].run_file_sha256.clone();
+    // Cell 0 records the run file the plan wrote: kept. Cell 1 holds another sweep's run
+    // (another run file): left out, as is cell 2, whose metrics.json is torn.
+    record_run_file(dir, 0, &planned);
+    record_run_file(dir, 1, &"f".repeat(64));
+    std::fs::write(dir.join("runs/2/metrics.json"), "{\"completed_steps\": 3, \"tot").unwrap();
+    let table = collect(dir).unwrap();
+    let a = &table.groups[0];
+    assert_eq!((a.planned, a.finished), (3, 1), "only cell 0 of capacity=0.2 counts");
+    assert_eq!(a.measures["average_performance"].n, 1);
+    assert_eq!(table.left_out.len(), 2, "{:?}", table.left_out);
+    assert!(
+        table.left_out[0].starts_with("cell 1 (") && table.left_out[0].contains("ffffffffffff"),
+        "{:?}",
+        table.left_out
+    );
+    assert!(
+        table.left_out[1].starts_with("cell 2 (") && table.left_out[1].contains("metrics.json"),
+        "{:?}",
+        table.left_out
+    );
+    let md = markdown(&table);
+    let row = md.lines().find(|l| l.starts_with("| capacity=0.2")).unwrap();
+    assert!(row.contains("| 1/3 "), "{row}");
+    assert!(md.contains("Left out of the estimates") && md.contains("- cell 1 ("), "{md}");
+    // The other group is untouched.
+    assert_eq!(table.groups[1], collect(fixture()).unwrap().groups[1]);
+
+    let cells = quadcl::sweep::status(dir, false).unwrap();
+    let state = |i: usize| cells[i].state;
+    use quadcl::sweep::CellState;
+    assert_eq!((state(0), state(1), state(2)), (CellState::Finished, CellState::Foreign, CellState::Foreign));
+    let lines = quadcl::sweep::status_lines(&cells);
+    assert!(lines.contains("foreign") && lines.contains("2 foreign"), "{lines}");
+}

@@ -111,3 +111,43 @@ fn a_base_policy_found_neither_from_here_nor_beside_the_base_is_refused_naming_i
     assert!(cell.contains(&tmp.path().join("policies/no-such-base").display().to_string()), "{cell}");
     assert_eq!(p.cells.len(), 1);
 }
+
+#[test]
+fn a_newline_in_a_sweep_value_cannot_add_a_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A robot description whose file name holds a line break and a run file key after it.
+    let odd = tmp.path().join("a1.urdf\nrun = { keep_last_checkpoint_only = true }");
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/a1.urdf"), &odd).unwrap();
+    let axis = toml::Value::String(odd.display().to_string());
+    let file = sweep_file(tmp.path(), &format!("\"env.urdf\" = [{axis}]\n"));
+    // The sweep file's own path holds one too.
+    let odd_file = tmp.path().join("sweep\n[run]\nkeep_last_checkpoint_only = true\n#.toml");
+    std::fs::rename(&file, &odd_file).unwrap();
+    let out = tmp.path().join("out");
+    let p = plan(&odd_file, &out).unwrap();
+    let path = out.join(&p.cells[0].config);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let run = RunConfig::load(&path).unwrap();
+    assert!(!run.run.keep_last_checkpoint_only, "a key came from a value:\n{text}");
+    assert_eq!(run.config.env.urdf, odd.display().to_string(), "the value itself is kept whole");
+    let comment = text.lines().next().unwrap();
+    assert!(comment.starts_with("# Cell 0") && comment.contains("\\n"), "{comment}");
+    let toml: toml::Table = toml::from_str(&text).unwrap();
+    assert_eq!(toml.get("run").and_then(|r| r.get("keep_last_checkpoint_only")), None, "{text}");
+}
+
+#[test]
+fn a_path_value_that_does_not_exist_is_refused_when_planning() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = sweep_file(tmp.path(), "\"env.urdf\" = [\"scenes/a1.urdf\", \"robots/no-such.urdf\"]\n");
+    let out = tmp.path().join("never");
+    let err = format!("{:#}", plan(&file, &out).unwrap_err());
+    for needle in ["env.urdf", "robots/no-such.urdf", "exists neither"] {
+        assert!(err.contains(needle), "expected {needle:?} in {err}");
+    }
+    assert!(!out.exists(), "nothing is written");
+    // A shipped description stays as the run file names it (every build has it).
+    let file = sweep_file(tmp.path(), "\"env.urdf\" = [\"scenes/a1.urdf\"]\n");
+    let p = plan(&file, &out).unwrap();
+    assert_eq!(RunConfig::load(&out.join(&p.cells[0].config)).unwrap().config.env.urdf, "scenes/a1.urdf");
+}

@@ -39,7 +39,7 @@ pub(crate) fn guard<T>(what: &str, f: impl FnOnce() -> anyhow::Result<T>) -> PyR
 
 /// A file that cannot be read is an `OSError`; every other error a `ValueError`.
 pub(crate) fn to_py_err(e: &anyhow::Error) -> PyErr {
-    let message = format!("{e:#}");
+    let message = quadcl::util::text::error_text(e);
     if e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some()) {
         PyOSError::new_err(message)
     } else {

@@ -46,7 +46,7 @@ pub fn task_name(task: &str) -> PyResult<String> {
 }
 
 pub fn parse_task(task: &str) -> anyhow::Result<Perturbation> {
-    task.parse::<Perturbation>().map_err(|e| anyhow::anyhow!("task {task:?}: {e:#}"))
+    task.parse::<Perturbation>().map_err(|e| anyhow::anyhow!("task {:?}: {e:#}", quadcl::util::text::clip(task)))
 }
 
 /// A run file's sequence: (`[env]` TOML, seed, [(task, iterations)], method).

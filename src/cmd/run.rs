@@ -37,7 +37,19 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         // Stopping after no task would train nothing and report an empty run.
         anyhow::ensure!(n >= 1, "--stop-after = {n}: expected at least 1 task");
     }
-    let m = quadcl::headless::run(
+    // The results are written: a figure that fails to draw is a warning, not the run's failure.
+    // They are drawn while the run still holds its folder.
+    let plots = args.out.join(quadcl::plot::PLOTS_DIR);
+    let draw = |_: &quadcl::engine::MetricsFile| {
+        if let Err(e) = quadcl::plot::write_run_plots(&args.out) {
+            eprintln!(
+                "warning: {}: the figures were not drawn: {}",
+                plots.display(),
+                quadcl::util::text::error_text(&e)
+            );
+        }
+    };
+    let m = quadcl::headless::run_then(
         &args.config,
         &args.out,
         quadcl::headless::RunOptions {
@@ -48,12 +60,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             method: args.method.clone(),
             no_tensorboard: args.no_tb,
         },
+        draw,
     )?;
-    // The results are written: a figure that fails to draw is a warning, not the run's failure.
-    let plots = args.out.join(quadcl::plot::PLOTS_DIR);
-    if let Err(e) = quadcl::plot::write_run_plots(&args.out) {
-        eprintln!("warning: {}: the figures were not drawn: {e:#}", plots.display());
-    }
     let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
     println!(
         "{} steps of {} ({}): average performance {}, forgetting {}, plasticity {}, forward transfer {}; results in {}",

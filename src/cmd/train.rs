@@ -56,6 +56,8 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     }
     let task: Perturbation = args.task.parse()?;
     let task_name = task.to_string();
+    // One training at a time in --out, held until this command returns.
+    let _lock = quadcl::engine::lock_folder(&args.out)?;
     if let Some(found) = existing_run(&args.out).filter(|_| !args.resume && !args.force) {
         anyhow::bail!(
             "{} already holds a training run ({found}): --resume continues it, --force replaces it, or choose another --out",

@@ -13,6 +13,12 @@ use std::path::Path;
 pub const SHIPPED_ROBOTS: [(&str, Option<&str>); 3] =
     [("a1", None), ("aliengo", Some("scenes/aliengo.toml")), ("anymal_c", Some("scenes/anymal_c.toml"))];
 
+/// Whether `path` (relative, `scenes/a1.urdf`) names a robot description every build ships
+/// (compiled in: found wherever a run starts).
+pub fn is_shipped_description(path: &Path) -> bool {
+    crate::sim::shipped::is_shipped(path)
+}
+
 /// The `[env]` table of a run file (it has `[[task]]`) or of a training config.
 /// Errors name the file and the problem.
 pub fn env_of_file(path: &Path) -> anyhow::Result<EnvConfig> {

@@ -31,14 +31,15 @@ mod shift;
 mod sim2real;
 mod toy_learner;
 
-pub use env_source::{env_of_file, env_of_robot, SHIPPED_ROBOTS};
+pub use env_source::{env_of_file, env_of_robot, is_shipped_description, SHIPPED_ROBOTS};
 pub use events::{ChannelObserver, Command, CommandSender, Event, EventLog, Observer};
 pub use learner::{Evaluation, Learner, TaskStart};
 pub use ppo_learner::{make_ppo_learner, max_episode_return, max_reward_rate, PpoTaskLearner};
 pub use results::{CommandTracking, SessionResults, StepRecord, Summary, TaskCurve};
 pub use run_config::{EvalConfig, LearnerKind, RunConfig, RunSection};
 pub use run_dir::{
-    task_file_name, MetricsFile, RunDir, CHECKPOINTS, CHOSEN_FILE, EPISODES, LOG_FILE, METRICS_FILE, RUN_FILE,
+    lock_folder, task_file_name, MetricsFile, RunDir, CHECKPOINTS, CHOSEN_FILE, EPISODES, LOCK_FILE, LOG_FILE,
+    METRICS_FILE, RUN_FILE,
 };
 pub use runner::{make_learner, OpenMode, Runner};
 pub use session::{ChosenSettings, Session, StepOutcome};

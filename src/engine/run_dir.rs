@@ -8,7 +8,10 @@
 //! - `episodes/step-NN-TASK/T.mcap`: with `--record mcap`, an evaluation episode of every
 //!   learned task T after the step;
 //! - `next-step.json`: switches and related tasks chosen in the workbench for the step to
-//!   train next (only while there are any).
+//!   train next (only while there are any);
+//! - `run.lock`: the folder's lock ([`RunDir::lock`]), held by the one process that may write
+//!   it (`quadcl run`, `train`, `finetune`, the workbench training into it), with its pid and
+//!   host; empty once released.
 //!
 //! After each step the checkpoint is written first, then `metrics.json`;
 //! both atomically, so an interruption at any moment leaves a folder that
@@ -17,7 +20,7 @@
 use super::learner::{Evaluation, Learner};
 use super::results::{SessionResults, StepRecord, Summary, TaskCurve};
 use crate::cl::EvalMatrix;
-use crate::util::{replace_dir, write_atomic, Provenance};
+use crate::util::{replace_dir, write_atomic, FolderLock, Provenance};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -30,6 +33,8 @@ pub const CHECKPOINTS: &str = "checkpoints";
 pub const EPISODES: &str = "episodes";
 /// The settings chosen in the workbench for the next step (see `engine::ChosenSettings`).
 pub const CHOSEN_FILE: &str = "next-step.json";
+/// The folder's lock file (see [`RunDir::lock`]).
+pub const LOCK_FILE: &str = "run.lock";
 
 /// The content of `metrics.json`: the session's results and their [`Summary`]
 /// (its fields stand at the top level of the file, after `eval_matrix`).
@@ -119,6 +124,15 @@ pub fn task_file_name(task: &str) -> String {
     task.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
 }
 
+/// Takes the lock of the output folder `root` (a run's, a training's, a fine-tuning's), or
+/// refuses naming the folder and its holder (see [`FolderLock`]).
+pub fn lock_folder(root: &Path) -> anyhow::Result<FolderLock> {
+    FolderLock::acquire(
+        &root.join(LOCK_FILE),
+        &format!("the folder {}", crate::util::text::one_line(&root.display().to_string())),
+    )
+}
+
 /// The output folder of a run.
 #[derive(Debug, Clone)]
 pub struct RunDir {
@@ -128,6 +142,12 @@ pub struct RunDir {
 impl RunDir {
     pub fn new(root: &Path) -> Self {
         Self { root: root.to_path_buf() }
+    }
+
+    /// Takes the folder's lock (creating the folder), or refuses with an error naming the
+    /// folder and the process that holds it: no second process may write a run folder.
+    pub fn lock(&self) -> anyhow::Result<FolderLock> {
+        lock_folder(&self.root)
     }
 
     pub fn metrics_path(&self) -> PathBuf {

@@ -21,7 +21,7 @@ use super::session::{ChosenSettings, Session, StepOutcome};
 use super::toy_learner::ToyLearner;
 use crate::cl::TaskSpec;
 use crate::record::{record_episodes, RecordFormat, RecordOptions};
-use crate::util::{replace_dir, write_atomic, Provenance};
+use crate::util::{replace_dir, write_atomic, FolderLock, Provenance};
 use anyhow::Context;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -71,6 +71,8 @@ pub struct Runner {
     seed: u64,
     episode_s: f64,
     lines: Arc<Mutex<String>>,
+    /// The run folder's lock, held as long as the runner lives (see [`RunDir::lock`]).
+    lock: FolderLock,
 }
 
 impl Runner {
@@ -88,7 +90,16 @@ impl Runner {
         echo: bool,
         method: Option<&str>,
     ) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
+        let text = match method {
+            Some(name) => RunConfig::text_with_method(&text, name, config)?,
+            None => text,
+        };
+        let cfg = RunConfig::load_text(config, &text)?;
         let dir = RunDir::new(out);
+        // Before the folder is looked at: a second process must not even read a folder that
+        // another is writing. (A bad run file is refused before, and writes nothing.)
+        let lock = dir.lock()?;
         let resume = match mode {
             OpenMode::New => {
                 anyhow::ensure!(
@@ -101,12 +112,6 @@ impl Runner {
             OpenMode::Resume => true,
             OpenMode::ResumeOrNew => dir.has_run(),
         };
-        let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
-        let text = match method {
-            Some(name) => RunConfig::text_with_method(&text, name, config)?,
-            None => text,
-        };
-        let cfg = RunConfig::load_text(config, &text)?;
         let previous = if resume {
             let stored = RunConfig::load(&out.join(RUN_FILE))
                 .with_context(|| format!("--resume: {} holds no readable run", out.display()))?;
@@ -123,7 +128,14 @@ impl Runner {
         } else {
             None
         };
-        let mut runner = Self::build(&cfg, text, dir, echo)?;
+        let mut runner = Self::build(&cfg, text, dir, echo, lock)?;
+        if let Some(h) = runner.lock.took_over() {
+            let line =
+                format!("took over the folder's lock from {}, which had ended without releasing it\n", h.describe());
+            if let Ok(mut l) = runner.lines.lock() {
+                l.push_str(&line);
+            }
+        }
         match previous {
             Some(prev) => {
                 let checkpoint = match prev.completed_steps {
@@ -151,6 +163,7 @@ impl Runner {
     /// Its results and last checkpoint are copied; `prior` is only read.
     pub fn continue_run(prior: &Path, config: &Path, out: &Path, echo: bool) -> anyhow::Result<Self> {
         let dir = RunDir::new(out);
+        let lock = dir.lock()?;
         anyhow::ensure!(!dir.has_run(), "{} already holds a run: open it instead", out.display());
         let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
         let cfg = RunConfig::load(config)?;
@@ -174,7 +187,7 @@ impl Runner {
         let done = prev.completed_steps;
         anyhow::ensure!(done > 0, "{} has no completed step to continue", prior.display());
         let source = RunDir::new(prior).checkpoint(done - 1, &prev.steps[done - 1].name);
-        let mut runner = Self::build(&cfg, text, dir, echo)?;
+        let mut runner = Self::build(&cfg, text, dir, echo, lock)?;
         runner.session.restore(prev.results(), &source).with_context(|| format!("continuing {}", prior.display()))?;
         // The whole folder is written beside `out` and renamed into place: an interruption
         // leaves either no run or the complete continuation.
@@ -189,12 +202,14 @@ impl Runner {
             replace_dir(&staged.checkpoint(done - 1, &name), |dir| copy_files(&source, dir))?;
             write_atomic(&fresh.join(RUN_FILE), runner.run_text.as_bytes())?;
             staged.write_metrics(&metrics)?;
-            staged.write_log(&log)
+            staged.write_log(&log)?;
+            // The new folder carries the lock this runner holds.
+            runner.lock.move_into(fresh)
         })?;
         Ok(runner)
     }
 
-    fn build(cfg: &RunConfig, run_text: String, dir: RunDir, echo: bool) -> anyhow::Result<Self> {
+    fn build(cfg: &RunConfig, run_text: String, dir: RunDir, echo: bool, lock: FolderLock) -> anyhow::Result<Self> {
         let reference = match &cfg.run.reference {
             Some(p) => Some(MetricsFile::load(p).context("the [run] reference")?),
             None => None,
@@ -230,6 +245,7 @@ impl Runner {
             seed: cfg.config.seed,
             episode_s: f64::from(cfg.config.env.episode_s),
             lines,
+            lock,
         })
     }
 

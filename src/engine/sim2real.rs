@@ -49,17 +49,22 @@ pub fn sim2real(
         "{} already holds a policy",
         out.display()
     );
+    let (mut learner, tasks) = PpoTaskLearner::from_policy(policy, episodes)?;
+    let id = tasks.iter().position(|t| t == task).ok_or_else(|| {
+        anyhow::anyhow!("{}: no task {task:?} to fine-tune; it has {tasks:?} (fine-tuning trains a learned task's private parameters)", policy.display())
+    })?;
+    // One fine-tuning at a time into `out` (its lock file is the one thing it may hold).
+    let mut lock = super::run_dir::lock_folder(out)?;
     // The new policy replaces `out` as a whole: anything else in it would be lost.
-    let holds_files = out.read_dir().map(|mut entries| entries.next().is_some()).unwrap_or(false);
+    let holds_files = out
+        .read_dir()
+        .map(|mut entries| entries.any(|e| e.is_ok_and(|e| e.file_name() != super::run_dir::LOCK_FILE)))
+        .unwrap_or(false);
     anyhow::ensure!(
         !holds_files,
         "--out {} is not empty: name a new directory for the fine-tuned policy",
         out.display()
     );
-    let (mut learner, tasks) = PpoTaskLearner::from_policy(policy, episodes)?;
-    let id = tasks.iter().position(|t| t == task).ok_or_else(|| {
-        anyhow::anyhow!("{}: no task {task:?} to fine-tune; it has {tasks:?} (fine-tuning trains a learned task's private parameters)", policy.display())
-    })?;
     learner.set_shift(shift);
     let evaluate_all = |learner: &mut PpoTaskLearner| -> anyhow::Result<Vec<Evaluation>> {
         let learned: Vec<usize> = (0..tasks.len()).filter(|&t| learner.has_task(t)).collect();
@@ -111,7 +116,9 @@ pub fn sim2real(
     // The new policy and its report appear together, or not at all.
     replace_dir(out, |dir| {
         learner.save(dir, &tasks)?;
-        write_atomic(&dir.join("finetune.json"), serde_json::to_string_pretty(&report)?.as_bytes())
+        write_atomic(&dir.join("finetune.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+        // The new folder carries the lock.
+        lock.move_into(dir)
     })?;
     Ok(report)
 }

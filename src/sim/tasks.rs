@@ -11,6 +11,7 @@
 //! parsing the canonical form gives the same value back.
 
 use super::robot::{Leg, JOINTS_PER_LEG, NUM_LEGS};
+use crate::util::text::clip;
 use anyhow::{anyhow, bail};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -116,15 +117,15 @@ impl FromStr for Perturbation {
             let (kind, leg) = part
                 .trim()
                 .split_once(':')
-                .ok_or_else(|| anyhow!("unknown task part '{part}' in '{text}'; {}", valid_syntax()))?;
-            let kind = PerturbationKind::ALL
-                .into_iter()
-                .find(|k| k.name().eq_ignore_ascii_case(kind.trim()))
-                .ok_or_else(|| anyhow!("unknown perturbation '{kind}' in task '{text}'; {}", valid_syntax()))?;
+                .ok_or_else(|| anyhow!("unknown task part '{}' in '{}'; {}", clip(part), clip(text), valid_syntax()))?;
+            let kind =
+                PerturbationKind::ALL.into_iter().find(|k| k.name().eq_ignore_ascii_case(kind.trim())).ok_or_else(
+                    || anyhow!("unknown perturbation '{}' in task '{}'; {}", clip(kind), clip(text), valid_syntax()),
+                )?;
             let leg = Leg::ALL
                 .into_iter()
                 .find(|l| l.name().eq_ignore_ascii_case(leg.trim()))
-                .ok_or_else(|| anyhow!("unknown leg '{leg}' in task '{text}'; {}", valid_syntax()))?;
+                .ok_or_else(|| anyhow!("unknown leg '{}' in task '{}'; {}", clip(leg), clip(text), valid_syntax()))?;
             items.push((kind, leg));
         }
         Ok(Self::new(items))

@@ -5,10 +5,13 @@
 //! end of the sequence the fall rate and the tracking errors (means over the
 //! tasks). Written as `DIR/collected.json` (per group its cells, their run
 //! folders and values, for `quadcl plot`) and `DIR/collected.md`, and printed.
-//! A cell that has not finished is listed but left out of the estimates.
+//! A cell that has not finished is listed but left out of the estimates; so is
+//! one whose folder holds another run's results (its `metrics.json` records
+//! another run file's sha256 than the plan's) or an unreadable `metrics.json`,
+//! and the table says which and why under it.
 
 use super::bootstrap::{estimate, Estimate, CONFIDENCE, RESAMPLES};
-use super::plan::Plan;
+use super::plan::{Cell, Plan};
 use super::{COLLECTED_JSON, COLLECTED_MD, SEED_AXIS};
 use crate::engine::{Summary, METRICS_FILE};
 use crate::util::write_atomic;
@@ -58,20 +61,97 @@ pub fn load_metrics<T: serde::de::DeserializeOwned>(run: &Path) -> anyhow::Resul
     read_metrics(run)?.map(|(path, text)| parse_metrics(&path, &text)).transpose()
 }
 
-/// [`load_metrics`] of a run that trained its whole sequence; Ok(None) also while it has steps
-/// left. The file (megabytes for a long sequence) is read once.
-pub fn load_finished<T: serde::de::DeserializeOwned>(run: &Path) -> anyhow::Result<Option<T>> {
+/// What a cell's run folder holds, checked against the plan.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CellRun {
+    /// No `metrics.json` yet.
+    NotStarted,
+    /// The cell's run: its `metrics.json` (path and text) records the run file the plan wrote
+    /// (or no run file hash at all, as runs from before it was recorded).
+    Planned { path: std::path::PathBuf, text: String },
+    /// Another run's results: its `metrics.json` records another run file's sha256 (a folder
+    /// copied from another sweep, or a cell re-planned since it ran).
+    Foreign { recorded: String },
+    /// A `metrics.json` that cannot be read or is not a run's.
+    Unreadable { problem: String },
+}
+
+impl CellRun {
+    /// Why the cell is left out of a table (None: it is not).
+    pub fn left_out(&self, dir: &Path, cell: &Cell) -> Option<String> {
+        let run = dir.join(&cell.run);
+        match self {
+            CellRun::NotStarted | CellRun::Planned { .. } => None,
+            CellRun::Foreign { recorded } => Some(format!(
+                "cell {} ({}): its {METRICS_FILE} records the run file sha256 {}…, not the {}… of {} that the \
+                 plan holds: another run's results, left out",
+                cell.index,
+                run.display(),
+                short_hash(recorded),
+                short_hash(&cell.run_file_sha256),
+                cell.config
+            )),
+            CellRun::Unreadable { problem } => {
+                Some(format!("cell {} ({}): {problem}; left out", cell.index, run.display()))
+            }
+        }
+    }
+}
+
+fn short_hash(hash: &str) -> String {
+    crate::util::text::clip(&hash.chars().take(12).collect::<String>())
+}
+
+/// What the run folder of `cell` (of the sweep in `dir`) holds (see [`CellRun`]).
+pub fn read_cell(dir: &Path, cell: &Cell) -> CellRun {
+    #[derive(Deserialize)]
+    struct Recorded {
+        #[serde(default)]
+        provenance: Option<RecordedProvenance>,
+    }
+    #[derive(Deserialize)]
+    struct RecordedProvenance {
+        #[serde(default)]
+        run_file_sha256: Option<String>,
+    }
+    let (path, text) = match read_metrics(&dir.join(&cell.run)) {
+        Ok(None) => return CellRun::NotStarted,
+        Ok(Some(found)) => found,
+        Err(e) => return CellRun::Unreadable { problem: crate::util::text::error_text(&e) },
+    };
+    match parse_metrics::<Recorded>(&path, &text) {
+        Err(e) => CellRun::Unreadable { problem: crate::util::text::error_text(&e) },
+        Ok(r) => match r.provenance.and_then(|p| p.run_file_sha256) {
+            Some(recorded) if recorded != cell.run_file_sha256 => CellRun::Foreign { recorded },
+            _ => CellRun::Planned { path, text },
+        },
+    }
+}
+
+/// The `metrics.json` of `cell`'s run as `T` (the fields `T` names) once the run has trained
+/// its whole sequence; Ok(None) while it has steps left, and for a cell whose folder holds
+/// another run's results or none that can be read (`sweep collect` names those). The file
+/// (megabytes for a long sequence) is read once.
+pub fn load_finished<T: serde::de::DeserializeOwned>(dir: &Path, cell: &Cell) -> anyhow::Result<Option<T>> {
     #[derive(Deserialize)]
     struct Progress {
         completed_steps: usize,
         total_steps: usize,
     }
-    let Some((path, text)) = read_metrics(run)? else { return Ok(None) };
+    let CellRun::Planned { path, text } = read_cell(dir, cell) else { return Ok(None) };
     let p: Progress = parse_metrics(&path, &text)?;
     if p.total_steps > 0 && p.completed_steps == p.total_steps {
         parse_metrics(&path, &text).map(Some)
     } else {
         Ok(None)
+    }
+}
+
+/// The measures of `cell`'s run, if its folder holds the planned run's (see [`read_cell`]).
+pub fn cell_measures(dir: &Path, cell: &Cell) -> Option<RunMeasures> {
+    match read_cell(dir, cell) {
+        CellRun::Planned { path, text } => parse_metrics(&path, &text).ok(),
+        _ => None,
     }
 }
 
@@ -144,17 +224,39 @@ pub struct Collected {
     /// (key, heading) of each measure, in the table's order.
     pub measures: Vec<(String, String)>,
     pub groups: Vec<CollectedGroup>,
+    /// The cells left out of the estimates, each with why (another run's results in its
+    /// folder, an unreadable `metrics.json`); empty when none is.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub left_out: Vec<String>,
 }
 
 /// Collects the sweep in `dir` (see the module doc); nothing is written.
 pub fn collect(dir: &Path) -> anyhow::Result<Collected> {
     let plan = Plan::load(dir)?;
     let mut groups = Vec::new();
+    let mut left_out = Vec::new();
     for (name, indices) in plan.groups() {
         let mut cells = Vec::new();
         for &i in &indices {
             let cell = &plan.cells[i];
-            let run = RunMeasures::load(&dir.join(&cell.run))?;
+            let found = read_cell(dir, cell);
+            let run = match &found {
+                CellRun::Planned { path, text } => match parse_metrics::<RunMeasures>(path, text) {
+                    Ok(r) => Some(r),
+                    Err(e) => {
+                        left_out.push(format!(
+                            "cell {i} ({}): {}; left out",
+                            dir.join(&cell.run).display(),
+                            crate::util::text::error_text(&e)
+                        ));
+                        None
+                    }
+                },
+                other => {
+                    left_out.extend(other.left_out(dir, cell));
+                    None
+                }
+            };
             let finished = run.as_ref().is_some_and(|r| r.finished());
             let measures = match &run {
                 Some(r) if finished => {
@@ -188,6 +290,7 @@ pub fn collect(dir: &Path) -> anyhow::Result<Collected> {
         });
     }
     Ok(Collected {
+        left_out,
         sweep_file: plan.sweep_file,
         confidence: CONFIDENCE,
         resamples: RESAMPLES,
@@ -244,11 +347,24 @@ pub fn markdown(table: &Collected) -> String {
         table.resamples
     );
     out.push_str(&aligned_table(&header, &rows));
+    if !table.left_out.is_empty() {
+        out.push_str("\nLeft out of the estimates (the seeds column counts only the cells kept):\n");
+        for why in &table.left_out {
+            out.push_str(&format!("- {}\n", crate::util::text::one_line(why)));
+        }
+    }
     out
+}
+
+/// `text` as a Markdown table cell: on one line, its `|` escaped.
+fn table_cell(text: &str) -> String {
+    crate::util::text::one_line(text).replace('|', "\\|")
 }
 
 /// `header` and `rows` as a Markdown table padded to aligned columns.
 pub fn aligned_table(header: &[String], rows: &[Vec<String>]) -> String {
+    let escape = |cells: &[String]| cells.iter().map(|c| table_cell(c)).collect::<Vec<_>>();
+    let (header, rows) = (escape(header), rows.iter().map(|r| escape(r)).collect::<Vec<_>>());
     let widths: Vec<usize> = (0..header.len())
         .map(|c| rows.iter().map(|r| r[c].chars().count()).chain([header[c].chars().count()]).max().unwrap_or(0))
         .collect();
@@ -256,9 +372,9 @@ pub fn aligned_table(header: &[String], rows: &[Vec<String>]) -> String {
         let padded: Vec<String> = cells.iter().zip(&widths).map(|(c, w)| format!("{c:<w$}")).collect();
         format!("| {} |\n", padded.join(" | "))
     };
-    let mut out = line(header);
+    let mut out = line(&header);
     out.push_str(&format!("|{}|\n", widths.iter().map(|w| "-".repeat(w + 2)).collect::<Vec<_>>().join("|")));
-    for r in rows {
+    for r in &rows {
         out.push_str(&line(r));
     }
     out

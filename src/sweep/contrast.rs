@@ -217,6 +217,7 @@ mod tests {
             resamples: RESAMPLES,
             measures: vec![("forgetting".into(), "forgetting".into())],
             groups,
+            left_out: Vec::new(),
         }
     }
 

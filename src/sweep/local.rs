@@ -16,10 +16,13 @@
 //! a cell another has started or finished since, and each runs until no cell is
 //! left; a cell's marker is changed at its end only while it still names that run.
 
-use super::marker::{hostname, read_marker, write_marker, ClaimLock, Marker};
+use super::collect::read_cell;
+use super::marker::{claim_lock, read_marker, running_elsewhere, write_marker, Marker};
 use super::plan::{Cell, Plan};
 use super::status::cell_finished;
 use super::LOGS_DIR;
+use crate::util::hostname;
+use crate::util::text::one_line;
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -79,8 +82,16 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
     for cell in &plan.cells {
         if cell_finished(&dir, cell) {
             report.already_finished.push(cell.index);
+        } else if let Some(why) = read_cell(&dir, cell).left_out(&dir, cell) {
+            // Training it would have to resume another run: the folder is left as it is.
+            say(&format!("{why}; not trained: move {} away to train the cell", dir.join(&cell.run).display()));
+            report.failed.push(cell.index);
         } else if running_elsewhere(&dir, cell) {
-            say(&format!("cell {} ({}): already running in another process, left to it", cell.index, cell.name));
+            say(&format!(
+                "cell {} ({}): already running in another process, left to it",
+                cell.index,
+                one_line(&cell.name)
+            ));
             report.running_elsewhere.push(cell.index);
         } else {
             todo.push(cell);
@@ -101,15 +112,15 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
             let Some(cell) = todo.pop() else { break };
             // Another `sweep local` on this folder may have taken the cell since the list was
             // made: the check and the start happen under the folder's claim lock.
-            let _claim = ClaimLock::acquire(&dir)?;
+            let _claim = claim_lock(&dir)?;
             if cell_finished(&dir, cell) || running_elsewhere(&dir, cell) {
-                say(&format!("cell {} ({}): taken by another process, left to it", cell.index, cell.name));
+                say(&format!("cell {} ({}): taken by another process, left to it", cell.index, one_line(&cell.name)));
                 report.running_elsewhere.push(cell.index);
                 continue;
             }
             let child = spawn_cell(&dir, cell, options)?;
             write_marker(&dir, cell.index, Some(&Marker::Running { pid: child.id(), host: hostname() }))?;
-            say(&format!("cell {} ({}): started", cell.index, cell.name));
+            say(&format!("cell {} ({}): started", cell.index, one_line(&cell.name)));
             running.push(Running { index: cell.index, child, started: Instant::now() });
         }
         std::thread::sleep(Duration::from_millis(50));
@@ -124,14 +135,14 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
             let secs = done.started.elapsed().as_secs_f64();
             // The marker is ours to change only while it still names this run: once the run
             // ended, another `sweep local` may have started the cell again (a failed one).
-            let _claim = ClaimLock::acquire(&dir)?;
+            let _claim = claim_lock(&dir)?;
             let ours = read_marker(&dir, cell.index)
                 .is_some_and(|m| m == Marker::Running { pid: done.child.id(), host: hostname() });
             if status.success() && cell_finished(&dir, cell) {
                 if ours {
                     write_marker(&dir, cell.index, None)?;
                 }
-                say(&format!("cell {} ({}): finished in {secs:.1} s", cell.index, cell.name));
+                say(&format!("cell {} ({}): finished in {secs:.1} s", cell.index, one_line(&cell.name)));
                 report.finished.push(cell.index);
             } else {
                 if ours {
@@ -141,7 +152,7 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
                 say(&format!(
                     "cell {} ({}): failed ({status}) after {secs:.1} s; see {}",
                     cell.index,
-                    cell.name,
+                    one_line(&cell.name),
                     log_path(&dir, cell.index).display()
                 ));
                 report.failed.push(cell.index);
@@ -151,11 +162,6 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
     report.finished.sort_unstable();
     report.failed.sort_unstable();
     Ok(report)
-}
-
-/// Whether a live run (this host's, by its marker) is training `cell`.
-fn running_elsewhere(dir: &Path, cell: &Cell) -> bool {
-    read_marker(dir, cell.index).is_some_and(|m| m.is_alive())
 }
 
 /// The log of cell `index`.
@@ -171,8 +177,14 @@ fn spawn_cell(dir: &Path, cell: &Cell, options: &LocalOptions) -> anyhow::Result
         .append(true)
         .open(&log)
         .with_context(|| format!("opening {}", log.display()))?;
-    writeln!(file, "== quadcl sweep local: cell {} ({}), {} threads", cell.index, cell.name, options.threads_per_job)
-        .with_context(|| format!("writing {}", log.display()))?;
+    writeln!(
+        file,
+        "== quadcl sweep local: cell {} ({}), {} threads",
+        cell.index,
+        one_line(&cell.name),
+        options.threads_per_job
+    )
+    .with_context(|| format!("writing {}", log.display()))?;
     let err = file.try_clone().with_context(|| format!("opening {}", log.display()))?;
     let mut command = Command::new(&options.quadcl);
     command

@@ -4,10 +4,12 @@
 //! and nothing once it finished. A `running` marker whose process is gone
 //! (the sweep was killed) reads as not running: the run folder says how far
 //! the cell got, and the next `sweep local` resumes it. `DIR/state/claim.lock`
-//! is the lock under which a `sweep local` checks a cell and starts it.
+//! is the lock under which a `sweep local` checks a cell and starts it; the cell's run
+//! folder's own lock (`runs/I/run.lock`) says that a run is training it, whoever started it.
 
+use super::plan::Cell;
 use super::STATE_DIR;
-use crate::util::write_atomic;
+use crate::util::{hostname, process_exists, write_atomic, FolderLock};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -33,6 +35,14 @@ impl Marker {
     }
 }
 
+/// Whether a live run is training `cell` of the sweep in `dir`: this host's by its marker (a
+/// run just started, before it locked its folder), or any process holding the cell's run
+/// folder's lock.
+pub fn running_elsewhere(dir: &Path, cell: &Cell) -> bool {
+    read_marker(dir, cell.index).is_some_and(|m| m.is_alive())
+        || FolderLock::holder(&dir.join(&cell.run).join(crate::engine::LOCK_FILE)).is_some()
+}
+
 /// The marker file of cell `index` in the sweep folder `dir`.
 pub fn marker_path(dir: &Path, index: usize) -> PathBuf {
     dir.join(STATE_DIR).join(format!("{index}.json"))
@@ -54,61 +64,12 @@ pub fn write_marker(dir: &Path, index: usize, marker: Option<&Marker>) -> anyhow
     }
 }
 
-/// The folder's claim lock (`DIR/state/claim.lock`, an exclusive `flock`), held while a
-/// `sweep local` checks that a cell is still free and starts it (or changes its marker), so
-/// that several `sweep local` on one folder and machine never start the same cell twice (a
-/// marker from another host does not read as alive, so hosts sharing a folder do not share
-/// its cells this way). Released when dropped.
-pub struct ClaimLock {
-    _file: std::fs::File,
-}
-
-impl ClaimLock {
-    /// Waits for the claim lock of the sweep folder `dir`.
-    pub fn acquire(dir: &Path) -> anyhow::Result<Self> {
-        let state = dir.join(STATE_DIR);
-        std::fs::create_dir_all(&state).with_context(|| format!("creating {}", state.display()))?;
-        let path = state.join("claim.lock");
-        let file = std::fs::OpenOptions::new()
-            .create(true)
-            .truncate(false)
-            .write(true)
-            .open(&path)
-            .with_context(|| format!("opening {}", path.display()))?;
-        use std::os::fd::AsRawFd;
-        loop {
-            // SAFETY: flock on a descriptor this function owns; it is released when the file closes.
-            if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX) } == 0 {
-                return Ok(Self { _file: file });
-            }
-            let err = std::io::Error::last_os_error();
-            if err.kind() != std::io::ErrorKind::Interrupted {
-                return Err(err).with_context(|| format!("locking {}", path.display()));
-            }
-        }
-    }
-}
-
-/// This machine's host name ("unknown" if it cannot be read).
-pub fn hostname() -> String {
-    let mut buf = [0u8; 256];
-    // SAFETY: gethostname writes at most buf.len() bytes into buf.
-    let rc = unsafe { libc::gethostname(buf.as_mut_ptr().cast(), buf.len()) };
-    if rc != 0 {
-        return "unknown".into();
-    }
-    let end = buf.iter().position(|b| *b == 0).unwrap_or(buf.len());
-    String::from_utf8_lossy(&buf[..end]).into_owned()
-}
-
-/// Whether a process `pid` exists on this machine (and is not a zombie waiting to be reaped).
-fn process_exists(pid: u32) -> bool {
-    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        // The state letter follows the command name in parentheses.
-        Ok(stat) => stat.rsplit(')').next().and_then(|rest| rest.trim_start().chars().next()).is_some_and(|s| s != 'Z'),
-        // SAFETY: signal 0 only checks that the process exists.
-        Err(_) => !Path::new("/proc/self").exists() && unsafe { libc::kill(pid as libc::pid_t, 0) } == 0,
-    }
+/// The folder's claim lock (`DIR/state/claim.lock`, the [`FolderLock`] every run folder has
+/// too), waited for and held while a `sweep local` checks that a cell is still free and starts
+/// it (or changes its marker), so that several `sweep local` on one folder never start the same
+/// cell twice. Released when dropped.
+pub fn claim_lock(dir: &Path) -> anyhow::Result<FolderLock> {
+    FolderLock::wait(&dir.join(STATE_DIR).join("claim.lock"))
 }
 
 /// Whether process `pid`'s arguments include `--resume` (true where `/proc` cannot say).

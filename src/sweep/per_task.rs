@@ -104,7 +104,7 @@ pub fn collect_tasks(dir: &Path) -> anyhow::Result<CollectedTasks> {
         let mut runs: Vec<(String, RunTasks)> = Vec::new();
         for &i in &indices {
             let folder = &plan.cells[i].run;
-            if let Some(r) = load_finished::<RunTasks>(&dir.join(folder))? {
+            if let Some(r) = load_finished::<RunTasks>(dir, &plan.cells[i])? {
                 if let Some((first, f)) = runs.first() {
                     ensure!(
                         r.eval_matrix.tasks == f.eval_matrix.tasks,

@@ -12,6 +12,7 @@
 use super::file::{set_dotted, value_label, SweepFile, SEED_AXIS};
 use super::{CELLS_DIR, PLAN_FILE, RUNS_DIR};
 use crate::engine::RunConfig;
+use crate::util::text::{clip, one_line};
 use crate::util::{sha256_hex, write_atomic, Provenance};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
@@ -159,8 +160,11 @@ fn prepare(file: &Path) -> anyhow::Result<(Plan, Vec<PlannedCell>)> {
         for value in &axis.values {
             let mut one = base.clone();
             set_dotted(&mut one, &axis.key, value.clone())
-                .and_then(|_| RunConfig::from_toml_str(&toml::to_string(&one)?))
-                .with_context(|| format!("sweep file {shown}: [axes] \"{}\" = {value}", axis.key))?;
+                .and_then(|_| with_absolute_run_paths(one, &sweep.path))
+                .and_then(|one| RunConfig::from_toml_str(&toml::to_string(&one)?))
+                .with_context(|| {
+                    format!("sweep file {shown}: [axes] \"{}\" = {}", axis.key, clip(&value.to_string()))
+                })?;
         }
     }
     let names = short_names(&sweep);
@@ -229,10 +233,18 @@ fn plan_cell(
         }
         name.push(part);
     }
+    // A path an axis gives is found as the base's are (from here, else beside the sweep file).
+    let run = with_absolute_run_paths(run, &sweep.path)?;
     let name = name.join(" ");
     let group = if group.is_empty() { "all".to_string() } else { group.join(" ") };
     let body = toml::to_string(&run)?;
-    let text = format!("# Cell {index} of the sweep {}: {name}\n{body}", sweep.path.display());
+    // The comment quotes user-given text (the sweep file's path, the values): on one line, so
+    // that no line break in them can add a key to the run file.
+    let text = format!(
+        "# Cell {index} of the sweep {}: {}\n{body}",
+        one_line(&sweep.path.display().to_string()),
+        one_line(&name)
+    );
     let config = format!("{CELLS_DIR}/{index}.toml");
     let cfg = RunConfig::from_toml_str(&text)
         .with_context(|| format!("sweep file {}: cell {index} ({name})", sweep.path.display()))?;
@@ -290,30 +302,33 @@ fn json_of(value: &toml::Value) -> serde_json::Value {
     serde_json::to_value(value).unwrap_or_else(|_| serde_json::Value::String(value.to_string()))
 }
 
-/// The base run file's `[run] reference` and `base_policy` as absolute paths, found the way
-/// a run file finds them (as given, else beside the file): a cell's run file lives elsewhere.
-/// A path found neither way is an error here, not a cell that fails later.
-fn with_absolute_run_paths(mut base: toml::Value, base_path: &Path) -> anyhow::Result<toml::Value> {
-    let folder = base_path.parent().unwrap_or(Path::new("."));
-    if let Some(run) = base.get_mut("run").and_then(|r| r.as_table_mut()) {
-        for key in ["reference", "base_policy"] {
-            if let Some(toml::Value::String(p)) = run.get_mut(key) {
-                let given = PathBuf::from(&*p);
-                let found = if given.is_relative() && !given.exists() { folder.join(&given) } else { given };
-                if !found.exists() {
-                    let here = std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default();
-                    anyhow::bail!(
-                        "[run] {key} = {p:?} exists neither from the current folder ({here}) nor beside the run \
-                         file ({}): plan from the folder its paths are relative to (the repository root for the \
-                         shipped files)",
-                        folder.display()
-                    );
-                }
-                if let Ok(absolute) = std::path::absolute(&found) {
-                    *p = absolute.display().to_string();
-                }
-            }
+/// The paths of a run file as absolute paths, found the way a run finds them (as given, else
+/// beside the file `beside`): `[run] reference` and `base_policy`, and `[env] urdf` (a shipped
+/// robot's description, `scenes/a1.urdf`, is left as it is: every build has it). A cell's run
+/// file lives elsewhere, and runs from the sweep folder. A path found neither way is an error
+/// here, not a cell that fails later.
+fn with_absolute_run_paths(mut run: toml::Value, beside: &Path) -> anyhow::Result<toml::Value> {
+    let folder = beside.parent().unwrap_or(Path::new("."));
+    for (table, key) in [("run", "reference"), ("run", "base_policy"), ("env", "urdf")] {
+        let Some(toml::Value::String(p)) = run.get_mut(table).and_then(|t| t.get_mut(key)) else { continue };
+        let given = PathBuf::from(&*p);
+        if table == "env" && given.is_relative() && crate::engine::is_shipped_description(&given) {
+            continue;
+        }
+        let found = if given.is_relative() && !given.exists() { folder.join(&given) } else { given };
+        if !found.exists() {
+            let here = std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default();
+            anyhow::bail!(
+                "[{table}] {key} = \"{}\" exists neither from the current folder ({here}) nor beside {} \
+                 ({}): plan from the folder its paths are relative to (the repository root for the shipped files)",
+                clip(p),
+                beside.display(),
+                folder.display()
+            );
+        }
+        if let Ok(absolute) = std::path::absolute(&found) {
+            *p = absolute.display().to_string();
         }
     }
-    Ok(base)
+    Ok(run)
 }

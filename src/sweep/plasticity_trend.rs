@@ -146,7 +146,7 @@ pub fn plasticity_trend(dir: &Path) -> anyhow::Result<PlasticityTrend> {
         let mut sequence: Option<(String, Vec<String>)> = None;
         for &i in &indices {
             let folder = &plan.cells[i].run;
-            let Some(r) = load_finished::<RunMatrix>(&dir.join(folder))? else { continue };
+            let Some(r) = load_finished::<RunMatrix>(dir, &plan.cells[i])? else { continue };
             let tasks = r.trained_tasks();
             match &sequence {
                 Some((first, expected)) => ensure!(

@@ -73,6 +73,22 @@ fn shell_quote(text: &str) -> String {
     format!("'{}'", text.replace('\'', r"'\''"))
 }
 
+/// `path` as the inside of a double-quoted word of an `#SBATCH` line's file name pattern.
+/// sbatch's directive reader (`_get_argument`) ends a word at white space unless it is inside
+/// quotes (a backslash does not protect a space), takes a backslash as escaping the next
+/// character (so a `"` inside the quotes is written `\"`) and ends the line at an unquoted
+/// `#`; `%` (the pattern's own escape) is doubled. A backslash or a control character in the
+/// path is refused: after the reader a backslash would turn the pattern's `%a` off.
+fn sbatch_quoted_pattern(path: &str) -> anyhow::Result<String> {
+    anyhow::ensure!(
+        !path.chars().any(|c| c == '\\' || c.is_control()),
+        "the folder {:?} holds a backslash or a control character, which an #SBATCH line cannot carry: \
+         plan the sweep into a folder whose path has neither",
+        crate::util::text::clip(path)
+    );
+    Ok(path.replace('%', "%%").replace('"', "\\\""))
+}
+
 /// `0-3,5,7-8`: the indices as Slurm's array ranges.
 pub fn array_ranges(cells: &[usize]) -> String {
     let mut parts = Vec::new();
@@ -102,17 +118,18 @@ pub fn sbatch_script(dir: &Path, cells: &[usize], options: &SlurmOptions) -> any
     anyhow::ensure!(options.cpus_per_task >= 1, "--cpus-per-task = 0: expected at least 1");
     anyhow::ensure!(!cells.is_empty(), "{}: every cell has finished, nothing to submit", dir.display());
     let shown = dir.display().to_string();
-    anyhow::ensure!(!shown.contains('\n'), "{shown:?}: a folder name with a line break cannot go into a script");
+    let logs = sbatch_quoted_pattern(&format!("{shown}/{LOGS_DIR}/"))?;
     let mut s = String::from("#!/bin/bash\n");
     s.push_str(&format!(
-        "# The sweep {shown} as a Slurm array job, written by `quadcl sweep slurm`: task I trains cell I\n\
-         # (cells/I.toml into runs/I), resuming it where it stopped (a preempted or requeued task continues).\n"
+        "# The sweep {} as a Slurm array job, written by `quadcl sweep slurm`: task I trains cell I\n\
+         # (cells/I.toml into runs/I), resuming it where it stopped (a preempted or requeued task continues).\n",
+        crate::util::text::one_line(&shown)
     ));
     s.push_str("#SBATCH --job-name=quadcl-sweep\n");
     s.push_str(&format!("#SBATCH --array={}\n", array_ranges(cells)));
     s.push_str(&format!("#SBATCH --cpus-per-task={}\n", options.cpus_per_task));
     s.push_str("#SBATCH --ntasks=1\n");
-    s.push_str(&format!("#SBATCH --output={shown}/{LOGS_DIR}/%a.log\n"));
+    s.push_str(&format!("#SBATCH --output=\"{logs}%a.log\"\n"));
     s.push_str("#SBATCH --open-mode=append\n#SBATCH --requeue\n");
     for (flag, value) in [("partition", &options.partition), ("time", &options.time), ("mem", &options.mem)] {
         if let Some(v) = value {
@@ -232,7 +249,7 @@ mod tests {
             "#SBATCH --partition=cpu",
             "#SBATCH --time=02:00:00",
             "#SBATCH --mem=8G",
-            "#SBATCH --output=/scratch/sweep/logs/%a.log",
+            "#SBATCH --output=\"/scratch/sweep/logs/%a.log\"",
             "export RAYON_NUM_THREADS=\"${SLURM_CPUS_PER_TASK:-4}\"",
             "exec '/opt/quadcl it'\\''s/quadcl' run --config \"cells/${SLURM_ARRAY_TASK_ID}.toml\" --out \"runs/${SLURM_ARRAY_TASK_ID}\" --resume",
         ] {
@@ -242,6 +259,54 @@ mod tests {
         let err = format!("{:#}", sbatch_script(Path::new("/s"), &[0], &bad).unwrap_err());
         assert!(err.contains("--time"), "{err}");
         assert!(sbatch_script(Path::new("/s"), &[], &options).is_err());
+    }
+
+    /// The argument sbatch's directive reader takes from `line`, as its `_get_argument` reads it:
+    /// a word ends at white space outside quotes (checked before any escape), quotes group, a
+    /// backslash escapes the next character, an unquoted `#` ends the line.
+    fn sbatch_reads(line: &str) -> String {
+        let (mut out, mut quote, mut escaped) = (String::new(), None, false);
+        for c in line.chars() {
+            if quote.is_none() && c.is_whitespace() {
+                break;
+            }
+            if escaped {
+                escaped = false;
+            } else if c == '\\' {
+                escaped = true;
+                continue;
+            } else if let Some(q) = quote {
+                if c == q {
+                    quote = None;
+                    continue;
+                }
+            } else if c == '"' || c == '\'' {
+                quote = Some(c);
+                continue;
+            } else if c == '#' {
+                break;
+            }
+            out.push(c);
+        }
+        out
+    }
+
+    #[test]
+    fn an_odd_sweep_folder_reaches_sbatch_as_one_file_pattern() {
+        let options = SlurmOptions { cpus_per_task: 1, quadcl: "/q".into(), ..SlurmOptions::default() };
+        for folder in ["/scratch/my sweep's dir", "/s/a\"b#c 100%"] {
+            let s = sbatch_script(Path::new(folder), &[0], &options).unwrap();
+            let line = s.lines().find(|l| l.starts_with("#SBATCH --output=")).unwrap();
+            let pattern = sbatch_reads(line.trim_start_matches("#SBATCH "));
+            // Slurm's pattern then turns `%%` into `%` and `%a` into the array index.
+            let file = pattern.replace("%a", "7").replace("%%", "%");
+            assert_eq!(file, format!("--output={folder}/logs/7.log"), "{line}");
+            assert!(s.contains(&format!("cd {}\n", shell_quote(folder))));
+        }
+        for bad in ["/s/back\\slash", "/s/line\nbreak", "/s/tab\tx"] {
+            let err = format!("{:#}", sbatch_script(Path::new(bad), &[0], &options).unwrap_err());
+            assert!(err.contains("#SBATCH") && !err.contains('\n'), "{err}");
+        }
     }
 
     #[test]

@@ -6,11 +6,12 @@
 //! when the sweep was submitted to Slurm and `squeue` / `sacct` answer, the
 //! scheduler's word (queued, running, failed).
 
-use super::collect::RunMeasures;
-use super::marker::{read_marker, Marker};
+use super::collect::{cell_measures, read_cell, CellRun};
+use super::marker::{read_marker, running_elsewhere, Marker};
 use super::plan::{Cell, Plan};
 use super::slurm::task_states;
 use super::LOGS_DIR;
+use crate::util::text::one_line;
 use serde::{Deserialize, Serialize};
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -31,6 +32,9 @@ pub enum CellState {
     Failed,
     /// Its whole sequence is trained.
     Finished,
+    /// Its folder holds another run's results (its `metrics.json` records another run file
+    /// than the plan's) or an unreadable `metrics.json`: it counts in no table.
+    Foreign,
 }
 
 impl CellState {
@@ -43,6 +47,7 @@ impl CellState {
             CellState::Stopped => "stopped",
             CellState::Failed => "failed",
             CellState::Finished => "finished",
+            CellState::Foreign => "foreign",
         }
     }
 }
@@ -70,9 +75,10 @@ impl CellStatus {
     }
 }
 
-/// Whether cell `cell` of the sweep in `dir` has trained its whole sequence.
+/// Whether cell `cell` of the sweep in `dir` has trained its whole sequence (its own run: a
+/// folder holding another run's results has not).
 pub fn cell_finished(dir: &Path, cell: &Cell) -> bool {
-    RunMeasures::load(&dir.join(&cell.run)).ok().flatten().is_some_and(|m| m.finished())
+    cell_measures(dir, cell).is_some_and(|m| m.finished())
 }
 
 /// The status of every cell of the sweep in `dir`; `scheduler`: ask `squeue` and `sacct`
@@ -83,7 +89,12 @@ pub fn status(dir: &Path, scheduler: bool) -> anyhow::Result<Vec<CellStatus>> {
     let accounting = if scheduler { task_states(dir, "sacct") } else { None };
     let mut out = Vec::new();
     for cell in &plan.cells {
-        let run = RunMeasures::load(&dir.join(&cell.run))?;
+        let found = read_cell(dir, cell);
+        let foreign = found.left_out(dir, cell);
+        let run = match &found {
+            CellRun::Planned { .. } => cell_measures(dir, cell),
+            _ => None,
+        };
         let completed = run.as_ref().map_or(0, |r| r.completed_steps);
         let total_steps = run.as_ref().map_or(cell.iterations.len(), |r| r.total_steps);
         // Saturating: the counts come from a file (sweep.json) that may have been edited.
@@ -94,14 +105,15 @@ pub fn status(dir: &Path, scheduler: bool) -> anyhow::Result<Vec<CellStatus>> {
         let accounted = accounting.as_ref().and_then(|a| a.get(&cell.index)).map(String::as_str);
         let marker = read_marker(dir, cell.index);
         let mut note = String::new();
-        let state = if run.as_ref().is_some_and(|r| r.finished()) {
+        let state = if let Some(why) = foreign {
+            note = why;
+            CellState::Foreign
+        } else if run.as_ref().is_some_and(|r| r.finished()) {
             CellState::Finished
         } else if let Some(q) = queued.filter(|q| ["PENDING", "CONFIGURING", "REQUEUED", "REQUEUE_HOLD"].contains(q)) {
             note = q.to_string();
             CellState::Queued
-        } else if queued.is_some_and(|q| ["RUNNING", "COMPLETING"].contains(&q))
-            || marker.as_ref().is_some_and(Marker::is_alive)
-        {
+        } else if queued.is_some_and(|q| ["RUNNING", "COMPLETING"].contains(&q)) || running_elsewhere(dir, cell) {
             CellState::Running
         } else if let Some(Marker::Failed { exit_code, .. }) = &marker {
             note = exit_code.map_or("killed by a signal".into(), |c| format!("exit status {c}"));
@@ -159,7 +171,7 @@ fn parse_iteration_line(line: &str) -> Option<(usize, usize)> {
 pub fn status_lines(cells: &[CellStatus]) -> String {
     let mut out = String::new();
     for c in cells {
-        let note = if c.note.is_empty() { String::new() } else { format!(" ({})", c.note) };
+        let note = if c.note.is_empty() { String::new() } else { format!(" ({})", one_line(&c.note)) };
         out.push_str(&format!(
             "{:>4}  {:<9} {:>5.1} %  step {}/{}  {}{note}\n",
             c.index,
@@ -167,19 +179,23 @@ pub fn status_lines(cells: &[CellStatus]) -> String {
             100.0 * c.progress(),
             c.completed_steps,
             c.total_steps,
-            c.name
+            one_line(&c.name)
         ));
     }
     let count = |s: CellState| cells.iter().filter(|c| c.state == s).count();
     out.push_str(&format!(
-        "{} cells: {} finished, {} running, {} queued, {} stopped, {} failed, {} pending\n",
+        "{} cells: {} finished, {} running, {} queued, {} stopped, {} failed, {} pending{}\n",
         cells.len(),
         count(CellState::Finished),
         count(CellState::Running),
         count(CellState::Queued),
         count(CellState::Stopped),
         count(CellState::Failed),
-        count(CellState::Pending)
+        count(CellState::Pending),
+        match count(CellState::Foreign) {
+            0 => String::new(),
+            n => format!(", {n} foreign (another run's results: in no table)"),
+        }
     ));
     out
 }

@@ -21,8 +21,8 @@ pub struct SweepSnapshot {
 /// Reads the sweep folder `dir` (`scheduler`: ask Slurm too).
 pub fn snapshot(dir: &Path, scheduler: bool) -> SweepSnapshot {
     SweepSnapshot {
-        cells: crate::sweep::status(dir, scheduler).map_err(|e| format!("{e:#}")),
-        table: crate::sweep::collect(dir).map_err(|e| format!("{e:#}")),
+        cells: crate::sweep::status(dir, scheduler).map_err(|e| crate::util::text::error_text(&e)),
+        table: crate::sweep::collect(dir).map_err(|e| crate::util::text::error_text(&e)),
     }
 }
 
@@ -113,6 +113,10 @@ impl SweepView {
         self.message = Some(match state {
             CellState::Running => format!("cell {index} is training: open it when it has finished or stopped"),
             CellState::Pending | CellState::Queued => format!("cell {index} has not started: nothing to open yet"),
+            CellState::Foreign => format!(
+                "cell {index}'s folder holds another run's results, not the plan's (see `quadcl sweep status`): \
+                 not opened"
+            ),
             CellState::Failed if !crate::engine::RunDir::new(&run).has_run() => {
                 format!("cell {index} failed before it recorded anything: see its log in logs/{index}.log")
             }

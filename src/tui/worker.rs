@@ -152,7 +152,7 @@ impl Worker {
             let (mut runner, origin) = match open(&spec) {
                 Ok(r) => r,
                 Err(e) => {
-                    let _ = tx.send(WorkerMsg::Failed(format!("{e:#}")));
+                    let _ = tx.send(WorkerMsg::Failed(crate::util::text::error_text(&e)));
                     return;
                 }
             };
@@ -177,7 +177,7 @@ impl Worker {
             let _ = forward.join();
             match outcome {
                 Ok(Ok(())) => {}
-                Ok(Err(e)) => drop(tx.send(WorkerMsg::Failed(format!("{e:#}")))),
+                Ok(Err(e)) => drop(tx.send(WorkerMsg::Failed(crate::util::text::error_text(&e)))),
                 Err(_) => drop(tx.send(WorkerMsg::Failed("the session thread panicked (see stderr)".into()))),
             }
             let _ = tx.send(WorkerMsg::Exited);
@@ -231,7 +231,7 @@ impl Worker {
             let mut viewer = match RobotViewer::new(&policy, &task, 1, None) {
                 Ok(v) => v,
                 Err(e) => {
-                    let _ = tx.send(WorkerMsg::RobotFailed { task, error: format!("{e:#}") });
+                    let _ = tx.send(WorkerMsg::RobotFailed { task, error: crate::util::text::error_text(&e) });
                     return;
                 }
             };
@@ -246,7 +246,7 @@ impl Worker {
                         }
                     }
                     Err(e) => {
-                        let _ = tx.send(WorkerMsg::RobotFailed { task, error: format!("{e:#}") });
+                        let _ = tx.send(WorkerMsg::RobotFailed { task, error: crate::util::text::error_text(&e) });
                         return;
                     }
                 }
@@ -282,7 +282,7 @@ impl Worker {
                         out.display(),
                         out.display()
                     ),
-                    Err(e) => format!("recording {task} failed: {e:#}"),
+                    Err(e) => format!("recording {task} failed: {}", crate::util::text::error_text(&e)),
                 },
             };
             let _ = tx.send(WorkerMsg::Recorded { task, message });

@@ -1,15 +1,19 @@
 //! The base layer every other module may use (it imports none of them):
 //! atomic writes ([`write_atomic`], [`replace_dir`]), content hashes
 //! ([`sha256_hex`]), the derivation of every random stream ([`derive_seed`]),
-//! a stream's exact position for checkpoints ([`RngState`]), and where a result
-//! came from ([`Provenance`]).
+//! a stream's exact position for checkpoints ([`RngState`]), where a result
+//! came from ([`Provenance`]), one process at a time in a folder ([`FolderLock`]),
+//! and user-given text made safe to write and to quote ([`text`]).
 
 mod fs;
+mod lock;
 mod provenance;
 mod rng_state;
 mod seed;
+pub mod text;
 
 pub use fs::{recover_replaced_dir, replace_dir, write_atomic};
+pub use lock::{hostname, process_exists, FolderLock, Holder};
 pub use provenance::Provenance;
 pub use rng_state::{RngState, RNG_STATE_BYTES};
 pub use seed::{derive_seed, Stream};

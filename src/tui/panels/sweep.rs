@@ -24,6 +24,7 @@ fn state_style(state: CellState) -> Style {
         CellState::Queued => Color::Blue,
         CellState::Stopped => Color::Yellow,
         CellState::Failed => Color::Red,
+        CellState::Foreign => Color::Magenta,
         CellState::Pending => Color::DarkGray,
     })
 }
