@@ -143,6 +143,9 @@ fn every_config_key_out_of_its_range_is_an_error_naming_the_file_and_the_key() {
         ("[net.mask]\npacknet_keep = 0.0", "net.mask.packnet_keep"),
         ("[net.mask]\npiggyback_init = 0.001", "net.mask.piggyback_init"),
         ("[net.mask]\nentropy_iterations = 100000000", "net.mask.entropy_iterations"),
+        ("[net.mask]\nentropy_fraction = 1.5", "net.mask.entropy_fraction"),
+        ("[net.mask]\nentropy_fraction = 0.2\nentropy_iterations = 100", "both set the entropy phase"),
+        ("[net.mask]\nscore_learning_rate = -0.001", "net.mask.score_learning_rate"),
         ("[net.mask]\nvacant_share = nan", "net.mask.vacant_share"),
     ] {
         let err = load_error(dir.path(), "bad.toml", &format!("{text}\n"), quadcl::config::Config::load)

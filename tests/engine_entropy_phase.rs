@@ -20,7 +20,7 @@ fn first_iterations(entropy: bool) -> Vec<Metrics> {
     // a 512-wide PPO layer has 100 times as many): beta_H = 1e-2 here.
     let mask = MaskConfig {
         entropy,
-        entropy_iterations: E,
+        entropy_iterations: Some(E),
         entropy_weight: 1e-2,
         sigma_learning_rate: 0.05,
         ..MaskConfig::default()
@@ -88,4 +88,39 @@ fn a_tasks_curve_keeps_each_layers_sigma_and_churn() {
     // A curve without layers (a dense method) writes neither key.
     let dense = serde_json::to_value(TaskCurve::default()).unwrap();
     assert!(dense.get("sigma").is_none() && dense.get("mask_churn").is_none(), "{dense}");
+}
+
+#[test]
+fn the_entropy_phase_scales_with_the_tasks_budget() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("run.toml");
+    let run = |phase: &str| {
+        std::fs::write(
+            &cfg,
+            format!(
+                "seed = 2\n[run]\nlearner = \"toy\"\n[net.mask]\n{phase}\n[[task]]\nname = \"crash:FL\"\n\
+                 iterations = 20\n[[task]]\nname = \"invert:RR\"\niterations = 40\n"
+            ),
+        )
+        .unwrap();
+        let out = tmp.path().join(phase.replace([' ', '='], ""));
+        let options = quadcl::headless::RunOptions { no_tensorboard: true, ..Default::default() };
+        quadcl::headless::run(&cfg, &out, options).unwrap()
+    };
+    let share = run("entropy_fraction = 0.25");
+    let phases: Vec<usize> = share.steps.iter().map(|s| s.soft_scores.unwrap().entropy_iterations).collect();
+    assert_eq!(phases, [5, 10], "a quarter of 20 and of 40 iterations");
+    assert!(share.steps.iter().all(|s| s.soft_scores.unwrap().score_learning_rate == 1e-3), "the paper's rate");
+    for (curve, e) in share.curves.iter().zip([5, 10]) {
+        let sigma = &curve.sigma["toy.l0"];
+        let ratio = |i: usize| sigma[i] / sigma[i - 1];
+        assert!((ratio(e - 1) - 0.99).abs() > 1e-4, "{}: sigma trains, not decays, inside the phase", curve.name);
+        for i in e + 1..sigma.len() {
+            assert!((ratio(i) - 0.99).abs() < 1e-4, "{}: no decay at iteration {i} after E = {e}", curve.name);
+        }
+    }
+    // A count stays a count whatever the budget.
+    let count = run("entropy_iterations = 5");
+    let phases: Vec<usize> = count.steps.iter().map(|s| s.soft_scores.unwrap().entropy_iterations).collect();
+    assert_eq!(phases, [5, 5]);
 }

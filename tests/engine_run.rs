@@ -155,3 +155,37 @@ fn the_shipped_metrics_json_written_before_the_renames_still_reads_and_round_tri
     let again: MetricsFile = serde_json::from_str(&serde_json::to_string_pretty(&m).unwrap()).unwrap();
     assert_eq!(again, m, "what it reads it writes back unchanged");
 }
+
+#[test]
+fn a_run_folder_from_before_issue_60_resumes_with_the_readings_it_ran() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Budgets of 10: the paper's share would give E = 2 where the run had 100, and the means a
+    // fixed 1e-3 where they had the optimiser's rate.
+    let unpinned = "seed = 5\niterations = 10\n[run]\nlearner = \"toy\"\n[[task]]\nname = \"crash:FL\"\n\
+                    [[task]]\nname = \"invert:RR\"\n";
+    let pinned =
+        unpinned.replacen("[[task]]", "[net.mask]\nentropy_iterations = 100\nscore_learning_rate = 0.0\n[[task]]", 1);
+    let (unpinned_file, pinned_file) =
+        (write_named(tmp.path(), "new.toml", unpinned), write_named(tmp.path(), "old.toml", &pinned));
+    let reference = run(&pinned_file, &tmp.path().join("reference"), opts(false, None)).unwrap();
+    // A folder as a run before issue 60 left it: its run.toml names neither reading, and its
+    // steps record no soft-score schedule.
+    let old = tmp.path().join("old");
+    run(&pinned_file, &old, opts(false, Some(1))).unwrap();
+    std::fs::write(old.join("run.toml"), unpinned).unwrap();
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(old.join("metrics.json")).unwrap()).unwrap();
+    for step in m["steps"].as_array_mut().unwrap() {
+        assert!(step.as_object_mut().unwrap().remove("soft_scores").is_some(), "a step records its schedule");
+    }
+    std::fs::write(old.join("metrics.json"), serde_json::to_string(&m).unwrap()).unwrap();
+    let resumed = run(&unpinned_file, &old, opts(true, None)).unwrap();
+    assert_eq!(resumed.eval_matrix, reference.eval_matrix, "the old run goes on as it ran");
+    assert_eq!(resumed.curves, reference.curves);
+    let last = resumed.steps[1].soft_scores.unwrap();
+    assert_eq!((last.entropy_iterations, last.score_learning_rate), (100, 0.0));
+    // A run begun now takes the paper's readings: the same file trains otherwise.
+    let new = run(&unpinned_file, &tmp.path().join("new"), opts(false, None)).unwrap();
+    assert_eq!(new.steps[0].soft_scores.unwrap().entropy_iterations, 2);
+    assert_ne!(new.curves, reference.curves);
+}

@@ -11,7 +11,7 @@ fn sequence(text: &str) -> Sequence {
 }
 
 fn session(seq: &str) -> Session {
-    let mask = MaskConfig { entropy_iterations: 2, ..MaskConfig::default() };
+    let mask = MaskConfig { entropy_iterations: Some(2), ..MaskConfig::default() };
     let learner = ToyLearner::new(&mask, 7).unwrap();
     Session::new(Box::new(learner), Box::new(Ours), sequence(seq), mask.clone(), Switches::from_mask_config(&mask), 7)
         .unwrap()

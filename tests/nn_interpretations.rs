@@ -81,8 +81,12 @@ fn a_zero_bias_start_ignores_the_related_tasks_biases() {
 #[test]
 fn an_entropy_term_on_the_action_leaves_the_soft_scores_and_acts_for_e_iterations() {
     for target in [EntropyTarget::SoftScores, EntropyTarget::Action] {
-        let cfg =
-            MaskConfig { entropy_target: target, entropy_iterations: 3, entropy_weight: 0.02, ..MaskConfig::default() };
+        let cfg = MaskConfig {
+            entropy_target: target,
+            entropy_iterations: Some(3),
+            entropy_weight: 0.02,
+            ..MaskConfig::default()
+        };
         let mut net = first_task(&cfg);
         start(&mut net, 1, &[], &cfg);
         let on_action = target == EntropyTarget::Action;

@@ -36,7 +36,7 @@ fn packnet_keeps_the_largest_fresh_weights_freezes_them_and_recalls_without_late
         reinit_weights: false,
         reinit_scores: ScoreReinit::None,
         entropy: false,
-        entropy_iterations: 0,
+        entropy_iterations: Some(0),
         packnet_keep: 0.5,
         packnet_prune_at: Some(8),
         ..MaskConfig::default()
@@ -82,7 +82,7 @@ fn piggyback() -> MaskConfig {
         reinit_weights: false,
         reinit_scores: ScoreReinit::None,
         entropy: false,
-        entropy_iterations: 0,
+        entropy_iterations: Some(0),
         ..MaskConfig::default()
     }
 }

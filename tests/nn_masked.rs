@@ -98,8 +98,12 @@ fn entropy_term_widens_sigma_then_sigma_decays_to_its_floor() {
     // The layer trains ln sigma at its own fixed rate, which Adam moves by about that rate per
     // step: with one step per iteration a large rate is needed to widen sigma visibly within
     // E = 20 iterations.
-    let cfg =
-        MaskConfig { entropy_iterations: 20, entropy_weight: 1.0, sigma_learning_rate: 0.05, ..MaskConfig::default() };
+    let cfg = MaskConfig {
+        entropy_iterations: Some(20),
+        entropy_weight: 1.0,
+        sigma_learning_rate: 0.05,
+        ..MaskConfig::default()
+    };
     let (mut net, mut rng) = net_after(0, &cfg);
     net.begin_task(0, &[]).unwrap();
     let mut opt = MaskedAdam::new(AdamConfig { learning_rate: 1e-3, ..AdamConfig::default() });
@@ -135,7 +139,7 @@ fn entropy_term_widens_sigma_then_sigma_decays_to_its_floor() {
 /// large entropy weight and a loss that pushes sigma down, never give sigma <= 0 or a NaN.
 #[test]
 fn soft_score_sigma_stays_positive_and_finite_under_many_adam_steps() {
-    let cfg = MaskConfig { entropy_iterations: 1000, entropy_weight: 10.0, ..MaskConfig::default() };
+    let cfg = MaskConfig { entropy_iterations: Some(1000), entropy_weight: 10.0, ..MaskConfig::default() };
     let (mut net, mut rng) = net_after(0, &cfg);
     net.begin_task(0, &[]).unwrap();
     let mut opt = MaskedAdam::new(AdamConfig::default());

@@ -11,7 +11,14 @@ use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 
 fn policy_dir() -> tempfile::TempDir {
-    let cfg = MaskConfig { capacity: 0.25, vacant_share: 0.5, private_share: 0.05, ..MaskConfig::default() };
+    // The soft-score means at the optimiser's rate, as the snapshot was taken before issue 60.
+    let cfg = MaskConfig {
+        capacity: 0.25,
+        vacant_share: 0.5,
+        private_share: 0.05,
+        score_learning_rate: 0.0,
+        ..MaskConfig::default()
+    };
     let mut net = quadcl::nn::MaskedMlp::new("actor", &[IN, 16, OUT], quadcl::nn::Activation::Elu, &cfg, 21).unwrap();
     let ts = tasks(3, 21);
     let mut rng = ChaCha8Rng::seed_from_u64(22);

@@ -160,7 +160,7 @@ fn an_entropy_term_on_the_action_widens_the_policys_action_distribution() {
         let mut cfg = small_ppo_config();
         cfg.net.mask.entropy_target = target;
         cfg.net.mask.entropy_weight = 1.0;
-        cfg.net.mask.entropy_iterations = 4;
+        cfg.net.mask.entropy_iterations = Some(4);
         let metrics = run(&cfg, 4, 3);
         assert!(metrics
             .iter()

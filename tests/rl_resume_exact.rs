@@ -30,7 +30,7 @@ fn config(iterations: usize) -> Config {
     cfg.net.critic.hidden = vec![16];
     cfg.net.cenet.hidden = vec![8];
     // The entropy phase ends before the checkpoint the crash resumes from (ln sigma stops training).
-    cfg.net.mask.entropy_iterations = 3;
+    cfg.net.mask.entropy_iterations = Some(3);
     cfg
 }
 

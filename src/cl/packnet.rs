@@ -58,7 +58,8 @@ pub fn without_plasticity_mechanisms(base: &MaskConfig, rule: SelectionRule) -> 
         reinit_weights: false,
         reinit_scores: ScoreReinit::None,
         entropy: false,
-        entropy_iterations: 0,
+        entropy_fraction: None,
+        entropy_iterations: Some(0),
         transfer_bonus: 0.0,
         ..base.clone()
     }

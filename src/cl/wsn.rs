@@ -56,7 +56,10 @@ impl ContinualMethod for Wsn {
         m.sigma_scale = SigmaScale::Absolute;
         m.sigma_init = WSN_SIGMA;
         m.sigma_floor = m.sigma_floor.min(WSN_SIGMA);
-        m.entropy_iterations = 0;
+        m.entropy_fraction = None;
+        m.entropy_iterations = Some(0);
+        // One optimiser for weights and scores (Kang et al.), as its committed runs trained.
+        m.score_learning_rate = 0.0;
         m.validate()?;
         Ok(m)
     }
@@ -73,8 +76,9 @@ mod tests {
         let m = Wsn.task_mask_config(&MaskConfig::default(), &switches, 10).unwrap();
         assert_eq!(
             (m.rule, m.reinit_weights, m.reinit_scores, m.entropy, m.private_share, m.capacity, m.entropy_iterations),
-            (SelectionRule::PerLayer, false, ScoreReinit::None, false, 0.0, 0.3, 0)
+            (SelectionRule::PerLayer, false, ScoreReinit::None, false, 0.0, 0.3, Some(0))
         );
+        assert_eq!(m.score_rate(), None, "WSN's scores step with the weights, at the optimiser's rate");
         assert!(m.sigma_init <= WSN_SIGMA && m.sigma_floor <= WSN_SIGMA);
         assert_eq!(m.score_init_std, MaskConfig::default().score_init_std, "the rest is the run's");
     }

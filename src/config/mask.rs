@@ -174,14 +174,29 @@ pub struct MaskConfig {
     /// Adam moves ln sigma by about its rate per step whatever beta_H is, so this rate and E
     /// decide how far the entropy term widens sigma.
     pub sigma_learning_rate: f64,
+    /// Adam's learning rate for the soft-score means mu, fixed, apart from the PPO optimiser's
+    /// KL-adapted rate (the paper, section 3.2: "Adam with a learning rate of 0.001 to update both
+    /// the basic network and the soft network"); 0: the PPO optimiser's rate, as every run before
+    /// issue 60 trained them. Piggyback's scores take `piggyback_learning_rate`, WSN's the
+    /// optimiser's (one optimiser, as Kang et al.), PackNet's never move.
+    pub score_learning_rate: f64,
     /// Whether the entropy term -beta_H * H is used (METHOD.md 2.3).
     pub entropy: bool,
     /// What the entropy term acts on: `soft_scores` (METHOD.md 2.3) or `action` (Figure 8's caption).
     pub entropy_target: EntropyTarget,
     /// beta_H, the weight of the entropy term.
     pub entropy_weight: f64,
-    /// E: the number of iterations of each task during which the entropy term is on.
-    pub entropy_iterations: usize,
+    /// E as a share of each task's budget: the entropy term is on for round(entropy_fraction *
+    /// iterations) iterations of a task of `iterations` (the paper: "100" of its 500, 0.2; a
+    /// share at other budgets is our reading, docs/method.md). With neither this nor
+    /// `entropy_iterations` set: 0.2. Set one of the two, not both.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub entropy_fraction: Option<f64>,
+    /// E as a count of iterations, whatever the task's budget (before issue 60 the only form,
+    /// default 100). A task's own settings carry the count its budget gives
+    /// ([`MaskConfig::for_budget`]), which its checkpoint records.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub entropy_iterations: Option<usize>,
     /// Multiplicative decay of sigma per iteration after E iterations (ln(decay) added to ln sigma).
     pub sigma_decay: f64,
     /// Lower bound of sigma (sigma units; applied to ln sigma as ln of it).
@@ -243,10 +258,12 @@ impl Default for MaskConfig {
             sigma_scale: SigmaScale::ScoreGap,
             sigma_init: 0.5,
             sigma_learning_rate: 1e-3,
+            score_learning_rate: PAPER_SOFT_RATE,
             entropy: true,
             entropy_target: EntropyTarget::SoftScores,
             entropy_weight: 1e-4,
-            entropy_iterations: 100,
+            entropy_fraction: None,
+            entropy_iterations: None,
             sigma_decay: 0.99,
             sigma_floor: 1e-3,
             sigma_max: 4.0,
@@ -266,7 +283,86 @@ impl Default for MaskConfig {
     }
 }
 
+/// The paper's entropy phase as a share of a task: 100 of its 500 iterations (section 2.4).
+pub const PAPER_ENTROPY_FRACTION: f64 = 0.2;
+/// The paper's budget of a task, in iterations ("We update each task by 500 epochs").
+pub const PAPER_TASK_ITERATIONS: usize = 500;
+/// The paper's Adam rate for the soft networks (section 3.2).
+pub const PAPER_SOFT_RATE: f64 = 1e-3;
+/// E before issue 60, when it was a count only.
+pub const PRE_ISSUE_60_ENTROPY_ITERATIONS: usize = 100;
+
 impl MaskConfig {
+    /// E for a task of `budget` iterations: the count where one is set, else round(fraction *
+    /// budget) (the paper's 0.2 when neither is set). The one place E is computed.
+    pub fn entropy_iterations_for(&self, budget: usize) -> usize {
+        match self.entropy_iterations {
+            Some(n) => n,
+            None => (self.entropy_fraction.unwrap_or(PAPER_ENTROPY_FRACTION) * budget as f64).round() as usize,
+        }
+    }
+
+    /// These settings for a task of `budget` iterations: E as the count it gives, the share cleared.
+    pub fn for_budget(&self, budget: usize) -> MaskConfig {
+        MaskConfig {
+            entropy_iterations: Some(self.entropy_iterations_for(budget)),
+            entropy_fraction: None,
+            ..self.clone()
+        }
+    }
+
+    /// E as a layer reads it: the count its task's budget resolved ([`MaskConfig::for_budget`]);
+    /// settings never resolved (a layer driven directly, outside a run) take the paper's own
+    /// budget, 0.2 x 500 = 100.
+    pub fn resolved_entropy_iterations(&self) -> usize {
+        self.entropy_iterations_for(PAPER_TASK_ITERATIONS)
+    }
+
+    /// The fixed Adam rate of the soft-score means under these settings; None: the optimiser's
+    /// (KL-adapted) rate. The one place it is decided.
+    pub fn score_rate(&self) -> Option<f64> {
+        let rate = match self.rule {
+            SelectionRule::Piggyback => self.piggyback_learning_rate,
+            // Its scores never move (an all-zero update mask); WSN sets its own rate to 0.
+            SelectionRule::PackNet => 0.0,
+            _ => self.score_learning_rate,
+        };
+        (rate > 0.0).then_some(rate)
+    }
+
+    /// These settings with what issue 60 changed read as before it, where the settings leave it
+    /// open: E a count of 100 unless a share or a count is set, the soft-score means at the
+    /// optimiser's rate. For a run that began before issue 60 and is resumed or continued
+    /// (see `engine::RunConfig::as_ran_before_issue_60`).
+    pub fn as_before_issue_60(&self, score_rate_set: bool) -> MaskConfig {
+        let mut m = self.clone();
+        if m.entropy_fraction.is_none() && m.entropy_iterations.is_none() {
+            m.entropy_iterations = Some(PRE_ISSUE_60_ENTROPY_ITERATIONS);
+        }
+        if !score_rate_set {
+            m.score_learning_rate = 0.0;
+        }
+        m
+    }
+
+    /// Fills in what a saved mask configuration from before issue 60 left out, as it ran: the
+    /// soft-score means stepped at the optimiser's rate (`score_learning_rate` 0; Piggyback and
+    /// PackNet never used it: the default stands, so a resume compares equal), and E was a count
+    /// (100 when the object names none). For checkpoints and manifests, which record a run.
+    /// Anything but a JSON object is left as it is.
+    pub fn fill_in_pre_issue_60(mask: &mut serde_json::Value) {
+        if let Some(m) = mask.as_object_mut() {
+            if !m.contains_key("score_learning_rate") {
+                let rule = m.get("rule").and_then(|r| r.as_str()).unwrap_or("split");
+                let rate = if matches!(rule, "piggyback" | "packnet") { PAPER_SOFT_RATE } else { 0.0 };
+                m.insert("score_learning_rate".into(), rate.into());
+                if !m.contains_key("entropy_fraction") {
+                    m.entry("entropy_iterations").or_insert(PRE_ISSUE_60_ENTROPY_ITERATIONS.into());
+                }
+            }
+        }
+    }
+
     /// These settings with `other`'s that do not act while a task is in progress: the end-of-task
     /// ones (`private_share`, `reinit_weights`, `reinit_scores`, `reinit_range`, `reinit_scale`,
     /// METHOD.md 2.4) and `bias_start`, which acts only when a new task begins. They may change
@@ -344,6 +440,7 @@ impl MaskConfig {
             ("sigma_floor", self.sigma_floor, POSITIVE),
             ("sigma_max", self.sigma_max, POSITIVE),
             ("sigma_learning_rate", self.sigma_learning_rate, UNIT),
+            ("score_learning_rate", self.score_learning_rate, UNIT),
             ("entropy_weight", self.entropy_weight, NON_NEGATIVE),
             // ln(decay) is added to ln sigma: 0 would send sigma to the floor in one step.
             ("sigma_decay", self.sigma_decay, POSITIVE_UNIT),
@@ -370,7 +467,18 @@ impl MaskConfig {
             self.piggyback_init,
             self.piggyback_threshold
         );
-        bounds::check_count("net.mask.entropy_iterations", self.entropy_iterations, 0, MAX_ITERATIONS)?;
+        if let Some(e) = self.entropy_iterations {
+            bounds::check_count("net.mask.entropy_iterations", e, 0, MAX_ITERATIONS)?;
+        }
+        if let Some(f) = self.entropy_fraction {
+            bounds::check("net.mask.entropy_fraction", f, UNIT)?;
+            anyhow::ensure!(
+                self.entropy_iterations.is_none(),
+                "net.mask.entropy_fraction = {f} and entropy_iterations = {} both set the entropy phase: keep one \
+                 (entropy_fraction, a share of each task's budget, the paper's 0.2; entropy_iterations, a count)",
+                self.entropy_iterations.unwrap_or_default()
+            );
+        }
         if let Some(at) = self.packnet_prune_at {
             bounds::check_count("net.mask.packnet_prune_at", at, 0, MAX_ITERATIONS)?;
         }
@@ -431,6 +539,59 @@ mod tests {
         MaskConfig::fill_in_pre_issue_13(&mut new);
         let m: MaskConfig = serde_json::from_value(new).unwrap();
         assert_eq!((m.sigma_scale, m.sigma_learning_rate), (SigmaScale::ScoreGap, 0.002));
+    }
+
+    #[test]
+    fn the_entropy_phase_is_a_share_of_the_budget_unless_a_count_is_set() {
+        let paper = MaskConfig::default();
+        assert_eq!(
+            [500, 200, 3].map(|b| paper.entropy_iterations_for(b)),
+            [100, 40, 1],
+            "the paper's 100 of 500, as a share"
+        );
+        let half = MaskConfig { entropy_fraction: Some(0.5), ..MaskConfig::default() };
+        assert_eq!(half.entropy_iterations_for(7), 4);
+        let count: MaskConfig = toml::from_str("entropy_iterations = 100").unwrap();
+        assert_eq!((count.entropy_iterations_for(200), count.entropy_iterations_for(5000)), (100, 100));
+        let resolved = half.for_budget(40);
+        assert_eq!((resolved.entropy_iterations, resolved.entropy_fraction), (Some(20), None));
+        assert_eq!(resolved.resolved_entropy_iterations(), 20, "a resolved count stays whatever the budget");
+        let both = MaskConfig { entropy_fraction: Some(0.3), entropy_iterations: Some(100), ..MaskConfig::default() };
+        let err = both.validate().unwrap_err().to_string();
+        assert!(err.contains("entropy_fraction") && err.contains("entropy_iterations"), "{err}");
+        let err = MaskConfig { entropy_fraction: Some(1.5), ..MaskConfig::default() }.validate().unwrap_err();
+        assert!(err.to_string().contains("net.mask.entropy_fraction"), "{err}");
+    }
+
+    #[test]
+    fn the_soft_score_means_have_their_own_rate_by_rule() {
+        assert_eq!(MaskConfig::default().score_rate(), Some(1e-3), "the paper's Adam 1e-3");
+        let at_ppo = MaskConfig { score_learning_rate: 0.0, ..MaskConfig::default() };
+        assert_eq!(at_ppo.score_rate(), None);
+        let piggyback = MaskConfig { rule: SelectionRule::Piggyback, ..MaskConfig::default() };
+        assert_eq!(piggyback.score_rate(), Some(piggyback.piggyback_learning_rate));
+        assert_eq!(MaskConfig { rule: SelectionRule::PackNet, ..MaskConfig::default() }.score_rate(), None);
+    }
+
+    #[test]
+    fn a_saved_mask_from_before_issue_60_is_read_as_it_ran() {
+        let mut old = serde_json::json!({ "rule": "split", "entropy_iterations": 7 });
+        MaskConfig::fill_in_pre_issue_60(&mut old);
+        let m: MaskConfig = serde_json::from_value(old).unwrap();
+        assert_eq!((m.score_rate(), m.entropy_iterations), (None, Some(7)));
+        let mut bare = serde_json::json!({ "rule": "split" });
+        MaskConfig::fill_in_pre_issue_60(&mut bare);
+        let m: MaskConfig = serde_json::from_value(bare).unwrap();
+        assert_eq!((m.score_learning_rate, m.entropy_iterations), (0.0, Some(100)));
+        // Under Piggyback and PackNet the rate never acted: the default stands.
+        let mut piggyback = serde_json::json!({ "rule": "piggyback" });
+        MaskConfig::fill_in_pre_issue_60(&mut piggyback);
+        assert_eq!(serde_json::from_value::<MaskConfig>(piggyback).unwrap().score_learning_rate, PAPER_SOFT_RATE);
+        // A mask written since names its rate and keeps it.
+        let mut new = serde_json::json!({ "score_learning_rate": 0.002, "entropy_fraction": 0.2 });
+        MaskConfig::fill_in_pre_issue_60(&mut new);
+        let m: MaskConfig = serde_json::from_value(new).unwrap();
+        assert_eq!((m.score_learning_rate, m.entropy_iterations, m.entropy_fraction), (0.002, None, Some(0.2)));
     }
 
     #[test]

@@ -35,7 +35,7 @@ pub use env_source::{env_of_file, env_of_robot, is_shipped_description, SHIPPED_
 pub use events::{ChannelObserver, Command, CommandSender, Event, EventLog, Observer};
 pub use learner::{Evaluation, Learner, TaskStart};
 pub use ppo_learner::{make_ppo_learner, max_episode_return, max_reward_rate, PpoTaskLearner};
-pub use results::{CommandTracking, SessionResults, StepRecord, Summary, TaskCurve};
+pub use results::{CommandTracking, SessionResults, SoftScoreSettings, StepRecord, Summary, TaskCurve};
 pub use run_config::{EvalConfig, LearnerKind, RunConfig, RunSection};
 pub use run_dir::{
     lock_folder, task_file_name, MetricsFile, RunDir, CHECKPOINTS, CHOSEN_FILE, EPISODES, LOCK_FILE, LOG_FILE,

@@ -20,6 +20,11 @@ pub struct StepRecord {
     /// on (the dense baselines).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub switches: Option<Switches>,
+    /// The entropy phase and the soft-score means' rate the step trained with (for a method
+    /// with switches); none in runs written before issue 60, which ran E = their
+    /// `entropy_iterations` (100 unless set) and the means at the optimiser's rate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub soft_scores: Option<SoftScoreSettings>,
     /// The related tasks whose masks seeded the soft scores (after `random` drawing).
     pub related: Vec<TaskId>,
     /// A repeat of a finished task (METHOD.md 2.5): only its private parameters and biases trained.
@@ -30,6 +35,25 @@ pub struct StepRecord {
     /// written before it was recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub capacity: Option<StepCapacity>,
+}
+
+/// The soft networks' schedule a step trained with (docs/method.md, "The entropy phase").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SoftScoreSettings {
+    /// E: the iterations of the task the entropy phase lasted (its share of the budget resolved).
+    pub entropy_iterations: usize,
+    /// The soft-score means' fixed Adam rate; 0: the optimiser's (KL-adapted) rate.
+    pub score_learning_rate: f64,
+}
+
+impl SoftScoreSettings {
+    /// What a task's resolved settings `mask` train with.
+    pub fn of(mask: &crate::config::net::MaskConfig) -> Self {
+        Self {
+            entropy_iterations: mask.resolved_entropy_iterations(),
+            score_learning_rate: mask.score_rate().unwrap_or(0.0),
+        }
+    }
 }
 
 /// How a masked task's selection used the networks, from the mask statistics right after

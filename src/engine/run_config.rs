@@ -107,6 +107,20 @@ impl RunConfig {
         Ok(cfg)
     }
 
+    /// [`Self::load_text`] as a run that began before issue 60 read the file: where it leaves
+    /// them open, E a count of 100 and the soft-score means at the optimiser's rate
+    /// ([`crate::config::net::MaskConfig::as_before_issue_60`]), so that such a run resumed or
+    /// continued trains its later tasks as it trained its first (docs/method.md, "The paper's
+    /// experiments and ours").
+    pub fn load_text_as_ran_before_issue_60(path: &Path, text: &str) -> anyhow::Result<Self> {
+        let mut cfg = Self::load_text(path, text)?;
+        let table: toml::Table = toml::from_str(text).with_context(|| format!("in run config {}", path.display()))?;
+        let rate_set =
+            table.get("net").and_then(|n| n.get("mask")).and_then(|m| m.get("score_learning_rate")).is_some();
+        cfg.config.net.mask = cfg.config.net.mask.as_before_issue_60(rate_set);
+        Ok(cfg)
+    }
+
     /// Parses run-file text.
     pub fn from_toml_str(text: &str) -> anyhow::Result<Self> {
         let mut table: toml::Table = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -226,6 +240,7 @@ fn check_task_masks(
         let mask = task_switches
             .apply(base_mask)
             .and_then(|_| method.task_mask_config(base_mask, &task_switches, sequence.iterations_of(i)))
+            .map(|mask| mask.for_budget(sequence.iterations_of(i)))
             .and_then(|mask| config.net.check_selects(&mask));
         mask.with_context(|| format!("task {} ({}): in [task.switches]", i + 1, task.name))?;
     }

@@ -113,6 +113,13 @@ impl MetricsFile {
         serde_json::from_value(value).with_context(not_metrics)
     }
 
+    /// Whether the run began before issue 60: a step with switches but no record of its soft
+    /// networks' schedule ([`super::results::StepRecord::soft_scores`]). Such a run is resumed
+    /// or continued with its run file read as it then was (`RunConfig::load_text_as_ran_before_issue_60`).
+    pub fn ran_before_issue_60(&self) -> bool {
+        self.steps.iter().any(|s| s.switches.is_some() && s.soft_scores.is_none())
+    }
+
     /// The per-step curves of normalised performance, by task name (first training of each).
     pub fn reference_curve(&self, task: &str) -> Option<Vec<f64>> {
         self.curves.iter().find(|c| c.name == task).map(|c| c.performance.clone())

@@ -112,8 +112,18 @@ impl Runner {
             OpenMode::Resume => true,
             OpenMode::ResumeOrNew => dir.has_run(),
         };
-        let previous = if resume {
-            let stored = RunConfig::load(&out.join(RUN_FILE))
+        let (cfg, previous) = if resume {
+            let prev = MetricsFile::load(&dir.metrics_path())?;
+            // A run begun before issue 60 goes on as it ran (docs/method.md).
+            let read = |path: &Path, text: &str| match prev.ran_before_issue_60() {
+                true => RunConfig::load_text_as_ran_before_issue_60(path, text),
+                false => RunConfig::load_text(path, text),
+            };
+            let cfg = read(config, &text)?;
+            let stored_path = out.join(RUN_FILE);
+            let stored = std::fs::read_to_string(&stored_path)
+                .map_err(anyhow::Error::from)
+                .and_then(|t| read(&stored_path, &t))
                 .with_context(|| format!("--resume: {} holds no readable run", out.display()))?;
             anyhow::ensure!(
                 stored == cfg,
@@ -124,9 +134,9 @@ impl Runner {
                 stored.method,
                 cfg.method
             );
-            Some(MetricsFile::load(&dir.metrics_path())?)
+            (cfg, Some(prev))
         } else {
-            None
+            (cfg, None)
         };
         let mut runner = Self::build(&cfg, text, dir, echo, lock)?;
         if let Some(h) = runner.lock.took_over() {
@@ -166,8 +176,17 @@ impl Runner {
         let lock = dir.lock()?;
         anyhow::ensure!(!dir.has_run(), "{} already holds a run: open it instead", out.display());
         let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
-        let cfg = RunConfig::load(config)?;
-        let prior_cfg = RunConfig::load(&prior.join(RUN_FILE))?;
+        let prev = MetricsFile::load(&prior.join(super::run_dir::METRICS_FILE))?;
+        // A run begun before issue 60 goes on as it ran (docs/method.md).
+        let read = |path: &Path, text: &str| match prev.ran_before_issue_60() {
+            true => RunConfig::load_text_as_ran_before_issue_60(path, text),
+            false => RunConfig::load_text(path, text),
+        };
+        let cfg = read(config, &text)?;
+        let prior_path = prior.join(RUN_FILE);
+        let prior_text =
+            std::fs::read_to_string(&prior_path).with_context(|| format!("reading {}", prior_path.display()))?;
+        let prior_cfg = read(&prior_path, &prior_text)?;
         for (what, same) in [
             ("seed, [env], [net] or [ppo]", cfg.config == prior_cfg.config),
             (
@@ -183,7 +202,6 @@ impl Runner {
         ] {
             anyhow::ensure!(same, "{} cannot continue {}: their {what} differ", config.display(), prior.display());
         }
-        let prev = MetricsFile::load(&prior.join(super::run_dir::METRICS_FILE))?;
         let done = prev.completed_steps;
         anyhow::ensure!(done > 0, "{} has no completed step to continue", prior.display());
         let source = RunDir::new(prior).checkpoint(done - 1, &prev.steps[done - 1].name);

@@ -278,14 +278,15 @@ pub fn tensor_integer(t: &Tensor, name: &str) -> anyhow::Result<u64> {
     }
 }
 
-/// [`MaskConfig::fill_in_pre_issue_13`], [`MaskConfig::fill_in_pre_issue_31`] and
-/// [`MaskConfig::fill_in_pre_issue_39`] on every
+/// [`MaskConfig::fill_in_pre_issue_13`], [`MaskConfig::fill_in_pre_issue_31`],
+/// [`MaskConfig::fill_in_pre_issue_39`] and [`MaskConfig::fill_in_pre_issue_60`] on every
 /// network's `mask` and on the run configuration's `net.mask` of a manifest.
 fn fill_in_old_masks(manifest: &mut serde_json::Value) {
     let fill = |mask: &mut serde_json::Value| {
         MaskConfig::fill_in_pre_issue_13(mask);
         MaskConfig::fill_in_pre_issue_31(mask);
         MaskConfig::fill_in_pre_issue_39(mask);
+        MaskConfig::fill_in_pre_issue_60(mask);
     };
     if let Some(networks) = manifest.get_mut("networks").and_then(|n| n.as_array_mut()) {
         networks.iter_mut().filter_map(|n| n.get_mut("mask")).for_each(fill);

@@ -378,12 +378,11 @@ impl MaskedLinear {
         };
         let mut out = vec![p("weight", &self.weight, t.weight_update.as_ref())];
         if !t.repeat {
-            // Piggyback's scores step at their own rate where one is set (Mallya et al.'s mask rate).
-            let score_rate = self.cfg.piggyback_learning_rate;
-            let fixed_learning_rate =
-                (self.cfg.rule == SelectionRule::Piggyback && score_rate > 0.0).then_some(score_rate);
+            // The soft-score means step at their own fixed rate where one is set (the paper's Adam
+            // 1e-3; Piggyback's, Mallya et al.'s mask rate), apart from PPO's KL-adapted one.
+            let fixed_learning_rate = self.cfg.score_rate();
             out.push(Param { fixed_learning_rate, ..p("score", &self.score_mean, t.score_update.as_ref()) });
-            if t.iteration < self.cfg.entropy_iterations {
+            if t.iteration < self.cfg.resolved_entropy_iterations() {
                 let rate = self.cfg.sigma_learning_rate;
                 let fixed_learning_rate = (rate > 0.0).then_some(rate);
                 out.push(Param { fixed_learning_rate, ..p("log_sigma", &self.log_sigma, None) });

@@ -207,6 +207,8 @@ pub fn train_from(
     let (mut learner, done, mut log, kept) = match resume {
         None => {
             let mut agent = Agent::new(env.dims(), config, config.seed)?;
+            // The one task's settings: E resolved for its budget (a share of it unless a count is set).
+            agent.set_mask_config(&config.net.mask.for_budget(cfg.iterations))?;
             agent.begin_task(0, &[])?;
             (
                 PpoLearner::new(cfg.clone(), agent, env.num_envs(), derive_seed(config.seed, Stream::Trainer(0)))?,

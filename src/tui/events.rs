@@ -53,6 +53,7 @@ impl App {
                     name: name.clone(),
                     iterations,
                     switches,
+                    soft_scores: None,
                     related,
                     repeat,
                     capacity: None,

@@ -21,7 +21,7 @@ mod restore;
 
 use super::events::{Command, CommandSender, Event, Observer};
 use super::learner::{Learner, TaskStart};
-use super::results::{SessionResults, StepRecord, TaskCurve};
+use super::results::{SessionResults, SoftScoreSettings, StepRecord, TaskCurve};
 use crate::cl::{ContinualMethod, EvalMatrix, Sequence, SwitchOverrides, Switches, TransferInit};
 use crate::config::net::MaskConfig;
 use crate::nn::TaskId;
@@ -270,7 +270,9 @@ impl Session {
         let spec = self.sequence.tasks[step].clone();
         let task = self.results.tasks.iter().position(|t| *t == spec.name).expect("distinct tasks cover the sequence");
         let switches = self.switches.with(&spec.switches.merged(&self.queued));
-        let mask = self.method.task_mask_config(&self.base_mask, &switches, self.sequence.iterations_of(step))?;
+        let iterations = self.sequence.iterations_of(step);
+        // The task's own settings: E resolved for its budget (a share of it unless a count is set).
+        let mask = self.method.task_mask_config(&self.base_mask, &switches, iterations)?.for_budget(iterations);
         let repeat = self.finished[task];
         let seed = derive_seed(self.seed, Stream::SequenceStep(step));
         let (related_names, init) = self.queued_transfer.take().unwrap_or((spec.related.clone(), spec.init));
@@ -294,6 +296,7 @@ impl Session {
             name: spec.name.clone(),
             iterations: start.iterations,
             switches: self.method.switches_in_force(&switches),
+            soft_scores: self.method.switches_in_force(&switches).map(|_| SoftScoreSettings::of(&start.mask)),
             related: related.clone(),
             repeat,
             capacity: None,

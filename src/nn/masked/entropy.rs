@@ -12,7 +12,7 @@ impl MaskedLinear {
     /// Whether the plasticity entropy term is on this iteration: a new task's first E
     /// iterations, the switch on (METHOD 2.3); whichever distribution it acts on.
     fn entropy_phase(&self) -> bool {
-        matches!(&self.training, Some(t) if !t.repeat && self.cfg.entropy && t.iteration < self.cfg.entropy_iterations)
+        matches!(&self.training, Some(t) if !t.repeat && self.cfg.entropy && t.iteration < self.cfg.resolved_entropy_iterations())
     }
 
     /// beta_H while the entropy term acts on the action distribution (`entropy_target =

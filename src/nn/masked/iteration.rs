@@ -65,7 +65,7 @@ impl MaskedLinear {
             return self.begin_baseline_iteration(iteration);
         }
         let mut log_sigma = var_values(&self.log_sigma)?[0];
-        if iteration >= self.cfg.entropy_iterations {
+        if iteration >= self.cfg.resolved_entropy_iterations() {
             log_sigma += (self.cfg.sigma_decay as f32).ln();
         }
         log_sigma = log_sigma.clamp((self.cfg.sigma_floor as f32).ln(), (self.cfg.sigma_max as f32).ln());
