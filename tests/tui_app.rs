@@ -90,7 +90,7 @@ fn curve_and_mask_keys_change_what_is_drawn() {
 }
 
 #[test]
-fn m_cycles_through_the_plasticity_diagnostics_of_a_trained_step() {
+fn m_cycles_through_the_plasticity_diagnostics_and_the_mask_churn_of_a_trained_step() {
     use quadcl::tui::app::CurveMetric;
     let tmp = tempfile::tempdir().unwrap();
     let (mut app, mut worker) = open_toy(tmp.path(), (120, 40));
@@ -113,6 +113,10 @@ fn m_cycles_through_the_plasticity_diagnostics_of_a_trained_step() {
     assert!(text.contains("toy.l0") && text.contains("toy.l1"), "one line per layer: {text}");
     app.update(Action::CurveMetricNext);
     assert!(panel(&app).contains("Curves: trainable share"));
+    app.update(Action::CurveMetricNext);
+    let text = panel(&app);
+    assert!(text.contains("Curves: mask churn · step 0 crash:FL · toy (1/1)"), "{text}");
+    assert!(text.contains("toy.l0") && text.contains("toy.l1"), "one churn line per layer: {text}");
     app.update(Action::CurveMetricNext);
     assert_eq!(app.metric, CurveMetric::Performance, "the cycle closes");
 }

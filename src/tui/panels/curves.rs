@@ -3,7 +3,7 @@
 //! weight the user sets (or switches off), downsampled to the chart's width.
 //! Live while the step trains (its curve grows with each iteration event).
 
-use super::plasticity_series::{plasticity_series, Series};
+use super::plasticity_series::{churn_series, plasticity_series, Series};
 use crate::engine::TaskCurve;
 use crate::rl::metric_names;
 use crate::tui::app::App;
@@ -31,6 +31,9 @@ pub enum CurveMetric {
     SelectedAbsW,
     /// `plasticity/trainable_share/LAYER`, one line per layer of one network.
     TrainableShare,
+    /// `charts/mask_churn/LAYER`: the share of the selected weights redrawn since the last
+    /// iteration, one line per layer of one network.
+    MaskChurn,
 }
 
 impl CurveMetric {
@@ -45,6 +48,7 @@ impl CurveMetric {
             CurveMetric::EffectiveRank => "effective rank",
             CurveMetric::SelectedAbsW => "selected |w|",
             CurveMetric::TrainableShare => "trainable share",
+            CurveMetric::MaskChurn => "mask churn",
         }
     }
 
@@ -83,7 +87,8 @@ impl CurveMetric {
             Dormant => EffectiveRank,
             EffectiveRank => SelectedAbsW,
             SelectedAbsW => TrainableShare,
-            TrainableShare => Performance,
+            TrainableShare => MaskChurn,
+            MaskChurn => Performance,
         }
     }
 }
@@ -153,9 +158,15 @@ fn shown(app: &App) -> Shown {
             None => return Shown { what: row.task, ..Shown::default() },
         }
     };
-    if let Some(prefix) = app.metric.plasticity_prefix() {
-        let per_layer = matches!(app.metric, CurveMetric::SelectedAbsW | CurveMetric::TrainableShare);
-        let s = plasticity_series(&curves, prefix, per_layer, app.network);
+    let layered = match (app.metric, app.metric.plasticity_prefix()) {
+        (CurveMetric::MaskChurn, _) => Some(churn_series(&curves, app.network)),
+        (_, Some(prefix)) => {
+            let per_layer = matches!(app.metric, CurveMetric::SelectedAbsW | CurveMetric::TrainableShare);
+            Some(plasticity_series(&curves, prefix, per_layer, app.network))
+        }
+        _ => None,
+    };
+    if let Some(s) = layered {
         let what = match s.network {
             Some((net, i, n)) => format!("{what} · {net} ({i}/{n})"),
             None => what,
@@ -189,6 +200,9 @@ pub fn draw(f: &mut Frame, area: Rect, app: &App, focused: bool) {
     if lines.iter().all(|l| l.points.is_empty()) {
         let why = match app.selected() {
             Some(r) if r.step.is_none() => "learned before the sequence (the base policy): no curve in this run",
+            Some(_) if app.metric == CurveMetric::MaskChurn => {
+                "no mask churn here (a dense method, a repeat, or not yet: it starts at a task's second iteration)"
+            }
             Some(_) if app.metric.plasticity_prefix().is_some() => {
                 "no plasticity diagnostics here (yet, or in a run written before they were recorded)"
             }

@@ -1,8 +1,9 @@
-//! The plasticity diagnostics (`plasticity/*`, `rl/plasticity.rs`) as the
-//! Curves panel draws them: one line per network (dormant units, effective
-//! rank) or per layer of one network (selected |w|, trainable share; `n`
-//! cycles the network, as in the Masks panel), from the steps' curves laid end
-//! to end, each step starting where the previous one's iterations ended.
+//! The plasticity diagnostics (`plasticity/*`, `rl/plasticity.rs`) and each
+//! layer's mask churn (`charts/mask_churn/LAYER`) as the Curves panel draws
+//! them: one line per network (dormant units, effective rank) or per layer of
+//! one network (selected |w|, trainable share, mask churn; `n` cycles the
+//! network, as in the Masks panel), from the steps' curves laid end to end,
+//! each step starting where the previous one's iterations ended.
 
 use crate::engine::TaskCurve;
 
@@ -37,13 +38,40 @@ fn network_of(layer: &str) -> &str {
 /// The lines of `prefix` (`plasticity/dormant`, ...) in `curves`, in order. With
 /// `per_layer`, only the layers of the `network`-th network (modulo how many appear).
 pub fn plasticity_series(curves: &[&TaskCurve], prefix: &str, per_layer: bool, network: usize) -> PlasticitySeries {
+    let names = |c: &TaskCurve| -> Vec<String> {
+        c.plasticity
+            .keys()
+            .filter_map(|k| k.strip_prefix(prefix).and_then(|k| k.strip_prefix('/')).map(str::to_string))
+            .collect()
+    };
+    let values = |c: &'_ TaskCurve, name: &str| c.plasticity.get(&format!("{prefix}/{name}")).cloned();
+    lines_of(curves, names, values, 0, per_layer, network)
+}
+
+/// Each layer's mask churn (the share of an iteration's selected weights the previous
+/// iteration had not selected), for the layers of the `network`-th network; a step's churn
+/// starts at its second iteration.
+pub fn churn_series(curves: &[&TaskCurve], network: usize) -> PlasticitySeries {
+    let names = |c: &TaskCurve| c.mask_churn.keys().cloned().collect::<Vec<_>>();
+    let values = |c: &'_ TaskCurve, name: &str| c.mask_churn.get(name).cloned();
+    lines_of(curves, names, values, 1, true, network)
+}
+
+/// The named lines `names` and `values` give in `curves`, each step's values from `offset`
+/// iterations into it (see [`plasticity_series`]).
+fn lines_of(
+    curves: &[&TaskCurve],
+    names_of: impl Fn(&TaskCurve) -> Vec<String>,
+    values_of: impl Fn(&TaskCurve, &str) -> Option<Vec<f64>>,
+    offset: usize,
+    per_layer: bool,
+    network: usize,
+) -> PlasticitySeries {
     let mut names: Vec<String> = Vec::new();
     for c in curves {
-        for key in c.plasticity.keys() {
-            if let Some(name) = key.strip_prefix(prefix).and_then(|k| k.strip_prefix('/')) {
-                if !names.iter().any(|n| n == name) {
-                    names.push(name.to_string());
-                }
+        for name in names_of(c) {
+            if !names.contains(&name) {
+                names.push(name);
             }
         }
     }
@@ -67,8 +95,8 @@ pub fn plasticity_series(curves: &[&TaskCurve], prefix: &str, per_layer: bool, n
             bounds.push(start as f64 - 0.5);
         }
         for line in &mut lines {
-            if let Some(values) = c.plasticity.get(&format!("{prefix}/{}", line.name)) {
-                line.points.extend(values.iter().enumerate().map(|(j, v)| ((start + j) as f64, *v)));
+            if let Some(values) = values_of(c, &line.name) {
+                line.points.extend(values.iter().enumerate().map(|(j, v)| ((start + offset + j) as f64, *v)));
             }
         }
         start += iterations(c);
@@ -118,5 +146,19 @@ mod tests {
         assert_eq!(s.network, Some(("actor".to_string(), 1, 2)), "the count wraps");
         assert_eq!(s.lines.len(), 2);
         assert!(plasticity_series(&[&curve(2, &[])], "plasticity/dormant", false, 0).lines.is_empty());
+    }
+
+    #[test]
+    fn each_layers_mask_churn_starts_at_its_steps_second_iteration() {
+        let mut a = curve(3, &[]);
+        a.mask_churn.insert("actor.l0".into(), vec![0.1, 0.2]);
+        a.mask_churn.insert("critic.l0".into(), vec![0.3, 0.4]);
+        let mut b = curve(2, &[]);
+        b.mask_churn.insert("actor.l0".into(), vec![0.05]);
+        let s = churn_series(&[&a, &b], 0);
+        assert_eq!(s.network, Some(("actor".to_string(), 1, 2)));
+        assert_eq!(s.lines.len(), 1);
+        assert_eq!(s.lines[0].points, vec![(1.0, 0.1), (2.0, 0.2), (4.0, 0.05)]);
+        assert_eq!(s.bounds, vec![2.5]);
     }
 }
