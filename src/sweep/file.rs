@@ -9,7 +9,18 @@
 //!
 //! An axis is any key of a run file by its dotted path (`seed`, `method.name`,
 //! `net.mask.capacity`, `task.0.iterations` with an index into `[[task]]`) and the
-//! values it takes. Axes cross in the order of their keys with `seed` last, so the
+//! values it takes. The axis `arm` takes named sets of keys instead, for variants that
+//! are not a cross of values (a ladder of settings):
+//!
+//! ```toml
+//! arm = [
+//!   { name = "5%" },
+//!   { name = "20%-settled", "net.mask.capacity" = 0.4, "net.mask.vacant_share" = 0.5, "method.entropy" = false },
+//! ]
+//! ```
+//!
+//! Each arm sets its keys (every arm's name unique; a cell's name says `arm=20%-settled`);
+//! it crosses with the other axes like any axis. Axes cross in the order of their keys with `seed` last, so the
 //! seeds of one setting are neighbouring cells. Every problem is an error naming the
 //! sweep file and the key; whether a value is one the run file accepts is checked
 //! when the sweep is planned (`plan`), before anything runs.
@@ -19,6 +30,9 @@ use std::path::{Path, PathBuf};
 
 /// The axis whose cells form one group of seeds (`sweep collect` averages over it).
 pub const SEED_AXIS: &str = "seed";
+
+/// The axis whose values are named sets of keys (see the module doc).
+pub const ARM_AXIS: &str = "arm";
 
 /// One axis: a run file key and the values it takes.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,7 +92,15 @@ impl SweepFile {
             anyhow::ensure!(!values.is_empty(), "{}: the axis is empty (give it at least one value)", where_());
             for (i, v) in values.iter().enumerate() {
                 anyhow::ensure!(!values[..i].contains(v), "{}: the value {v} is listed twice", where_());
-                anyhow::ensure!(!matches!(v, toml::Value::Table(_)), "{}: {v} is a table, expected a value", where_());
+                if key == ARM_AXIS {
+                    check_arm(v, &values[..i]).with_context(where_)?;
+                } else {
+                    anyhow::ensure!(
+                        !matches!(v, toml::Value::Table(_)),
+                        "{}: {v} is a table, expected a value (named sets of keys go in the `arm` axis)",
+                        where_()
+                    );
+                }
             }
             axes.push(Axis { key, values });
         }
@@ -93,6 +115,42 @@ impl SweepFile {
     }
 }
 
+/// An arm: a table with a `name` no earlier arm has and dotted run file keys set to values.
+fn check_arm(arm: &toml::Value, earlier: &[toml::Value]) -> anyhow::Result<()> {
+    let toml::Value::Table(table) = arm else {
+        anyhow::bail!("{arm} is not an arm: expected {{ name = \"...\", \"key\" = value, ... }}")
+    };
+    let name = match table.get("name") {
+        Some(toml::Value::String(n)) if !n.trim().is_empty() => n,
+        _ => anyhow::bail!("{arm}: an arm needs a `name` (a non-empty string)"),
+    };
+    anyhow::ensure!(!earlier.iter().any(|e| arm_name(e) == Some(name.as_str())), "two arms are named {name:?}");
+    for (key, value) in table.iter().filter(|(k, _)| *k != "name") {
+        check_key(key).with_context(|| format!("arm {name:?}: key {key:?}"))?;
+        anyhow::ensure!(key != SEED_AXIS && key != ARM_AXIS, "arm {name:?}: `{key}` cannot be set by an arm");
+        anyhow::ensure!(!matches!(value, toml::Value::Table(_)), "arm {name:?}: {key} = {value} is a table");
+    }
+    Ok(())
+}
+
+/// The name of an arm (`arm` axis value).
+pub fn arm_name(arm: &toml::Value) -> Option<&str> {
+    arm.get("name").and_then(|n| n.as_str())
+}
+
+/// Sets the keys an `axis` value gives on a run file: the value at the axis's key, or an
+/// arm's keys.
+pub fn apply_axis_value(root: &mut toml::Value, axis: &str, value: &toml::Value) -> anyhow::Result<()> {
+    if axis != ARM_AXIS {
+        return set_dotted(root, axis, value.clone());
+    }
+    let table = value.as_table().context("an arm is a table")?;
+    for (key, v) in table.iter().filter(|(k, _)| *k != "name") {
+        set_dotted(root, key, v.clone()).with_context(|| format!("arm {:?}: {key}", arm_name(value)))?;
+    }
+    Ok(())
+}
+
 /// A dotted path of non-empty segments of letters, digits, `_` and `-`.
 fn check_key(key: &str) -> anyhow::Result<()> {
     for segment in key.split('.') {
@@ -104,10 +162,12 @@ fn check_key(key: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `value` as it reads in a cell's name: strings without quotes, numbers as TOML writes them.
+/// `value` as it reads in a cell's name: strings without quotes, numbers as TOML writes them,
+/// an arm by its name.
 pub fn value_label(value: &toml::Value) -> String {
     match value {
         toml::Value::String(s) => s.clone(),
+        toml::Value::Table(_) if arm_name(value).is_some() => arm_name(value).unwrap_or_default().to_string(),
         other => other.to_string(),
     }
 }
@@ -178,6 +238,33 @@ mod tests {
         ] {
             let err = format!("{:#}", parse(text).unwrap_err());
             assert!(err.contains("scenes/sweep-test.toml") && err.contains(needle), "{needle}: {err}");
+        }
+    }
+
+    #[test]
+    fn an_arm_sets_its_own_keys_and_is_named_by_its_name() {
+        let f = parse(
+            "base = \"smoke.toml\"\n[axes]\nseed = [1]\narm = [{ name = \"5%\" }, \
+             { name = \"20%\", \"net.mask.capacity\" = 0.4, \"net.mask.vacant_share\" = 0.5 }]\n",
+        )
+        .unwrap();
+        assert_eq!(f.cell_count(), 2);
+        let arms = &f.axes[0];
+        assert_eq!(arms.key, "arm");
+        assert_eq!(arms.values.iter().map(value_label).collect::<Vec<_>>(), ["5%", "20%"]);
+        let mut root: toml::Value = toml::from_str("seed = 1\n").unwrap();
+        apply_axis_value(&mut root, "arm", &arms.values[1]).unwrap();
+        assert_eq!(root["net"]["mask"]["capacity"].as_float(), Some(0.4));
+        assert_eq!(root["net"]["mask"]["vacant_share"].as_float(), Some(0.5));
+        assert!(root.get("name").is_none(), "the arm's name is a label, not a key");
+        for (arms, needle) in [
+            ("[{ name = \"a\" }, { name = \"a\", seed = 2 }]", "two arms are named"),
+            ("[{ \"net.mask.capacity\" = 0.4 }]", "needs a `name`"),
+            ("[{ name = \"a\", seed = 2 }]", "cannot be set by an arm"),
+            ("[3]", "not an arm"),
+        ] {
+            let err = format!("{:#}", parse(&format!("base = \"s.toml\"\n[axes]\narm = {arms}\n")).unwrap_err());
+            assert!(err.contains(needle), "{needle}: {err}");
         }
     }
 

@@ -9,7 +9,7 @@
 //! that already holds this plan is left as it is (planning is idempotent, so a
 //! script may plan and run again); one that holds another sweep is refused.
 
-use super::file::{set_dotted, value_label, SweepFile, SEED_AXIS};
+use super::file::{apply_axis_value, value_label, SweepFile, SEED_AXIS};
 use super::{CELLS_DIR, PLAN_FILE, RUNS_DIR};
 use crate::engine::RunConfig;
 use crate::util::text::{clip, one_line};
@@ -159,7 +159,7 @@ fn prepare(file: &Path) -> anyhow::Result<(Plan, Vec<PlannedCell>)> {
     for axis in &sweep.axes {
         for value in &axis.values {
             let mut one = base.clone();
-            set_dotted(&mut one, &axis.key, value.clone())
+            apply_axis_value(&mut one, &axis.key, value)
                 .and_then(|_| with_absolute_run_paths(one, &sweep.path))
                 .and_then(|one| RunConfig::from_toml_str(&toml::to_string(&one)?))
                 .with_context(|| {
@@ -225,7 +225,7 @@ fn plan_cell(
     let (mut name, mut group) = (Vec::new(), Vec::new());
     for ((axis, short), &c) in sweep.axes.iter().zip(names).zip(choice) {
         let value = &axis.values[c];
-        set_dotted(&mut run, &axis.key, value.clone())?;
+        apply_axis_value(&mut run, &axis.key, value)?;
         values.insert(axis.key.clone(), json_of(value));
         let part = format!("{short}={}", value_label(value));
         if axis.key != SEED_AXIS {
