@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every findings sweep of issue 34 (scenes/findings/), in the order their inputs need,
+# Every findings sweep of issues 34 and 60 (scenes/findings/), in the order their inputs need,
 # resumable: a second call picks up where the first stopped (`quadcl sweep local` resumes
 # stopped cells and skips finished ones; a fine-tuning with its finetune.json is done).
 #
@@ -37,6 +37,7 @@ sweeps=(
   "fig5-selection|lambda=0.25|0|"
   "fig8-plasticity|reinit_scores=none reinit_weights=false|0|"
   "fig4-budget|iterations=500 name=ours|0|"
+  "ladder|arm=finetune|0|"
 )
 shift_file=scenes/findings/sim2real.shift.toml
 progress=policies/findings/progress

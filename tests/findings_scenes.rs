@@ -1,4 +1,4 @@
-//! The findings' sweep files (issue 34, `scenes/findings/`) plan as their headers say: every
+//! The findings' sweep files (issues 34 and 60, `scenes/findings/`) plan as their headers say: every
 //! cell's run file is checked (`sweep::check`, nothing written), and each sweep has its cells
 //! and at least three seeds per variant (the budget is the base file's, or an axis of one
 //! value, the same for all).
@@ -21,6 +21,8 @@ fn each_findings_sweep_plans_its_cells_with_three_seeds_per_variant() {
         ("fig5-selection", 9, 3),
         ("fig8-plasticity", 12, 4),
         ("fig11-reference", 3, 1),
+        ("ladder", 18, 6),
+        ("paper-shape", 12, 4),
     ] {
         let plan = check(&findings(name)).unwrap_or_else(|e| panic!("{name}: {e:#}"));
         assert_eq!(plan.cells.len(), cells, "{name}");

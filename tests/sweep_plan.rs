@@ -151,3 +151,26 @@ fn a_path_value_that_does_not_exist_is_refused_when_planning() {
     let p = plan(&file, &out).unwrap();
     assert_eq!(RunConfig::load(&out.join(&p.cells[0].config)).unwrap().config.env.urdf, "scenes/a1.urdf");
 }
+
+#[test]
+fn two_sweeps_planned_into_one_folder_at_once_never_mix_their_cells() {
+    for _ in 0..5 {
+        let tmp = tempfile::tempdir().unwrap();
+        let a = sweep_file(tmp.path(), "seed = [1, 2]\n");
+        let b = tmp.path().join("b.toml");
+        std::fs::write(&b, "base = \"smoke.toml\"\n[axes]\nseed = [3, 4, 5]\n").unwrap();
+        let out = tmp.path().join("out");
+        let (oa, ob) = (out.clone(), out.clone());
+        let ta = std::thread::spawn(move || plan(&a, &oa));
+        let tb = std::thread::spawn(move || plan(&b, &ob));
+        let results = [ta.join().unwrap(), tb.join().unwrap()];
+        assert_eq!(results.iter().filter(|r| r.is_ok()).count(), 1, "one plan wins, the other is refused");
+        let kept = Plan::load(&out).unwrap();
+        for cell in &kept.cells {
+            let text = std::fs::read_to_string(out.join(&cell.config)).unwrap();
+            assert_eq!(quadcl::util::sha256_hex(text.as_bytes()), cell.run_file_sha256, "cell {}", cell.index);
+        }
+        let files = std::fs::read_dir(out.join("cells")).unwrap().count();
+        assert_eq!(files, kept.cells.len(), "no cell file of the refused sweep");
+    }
+}

@@ -191,6 +191,9 @@ fn prepare(file: &Path) -> anyhow::Result<(Plan, Vec<PlannedCell>)> {
 
 /// Writes the cells' run files and `sweep.json` into `out`, unless it already holds this plan.
 fn write_plan(out: &Path, plan: &Plan, planned: &[PlannedCell]) -> anyhow::Result<Plan> {
+    // Two plans into one folder at once would mix their cells: the check and the writes happen
+    // under the folder's claim lock.
+    let _claim = super::marker::claim_lock(out)?;
     if out.join(PLAN_FILE).exists() {
         let existing = Plan::load(out)?;
         let hashes = |p: &Plan| p.cells.iter().map(|c| c.run_file_sha256.clone()).collect::<Vec<_>>();
