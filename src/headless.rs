@@ -88,7 +88,7 @@ impl TensorBoardObserver {
     }
 
     /// Writes to the sequence's log while it works.
-    fn to_sequence(&mut self, write: impl FnOnce(&mut ScalarLog) -> anyhow::Result<()>) {
+    fn write_sequence(&mut self, write: impl FnOnce(&mut ScalarLog) -> anyhow::Result<()>) {
         if let Some(sequence) = &mut self.sequence {
             if let Err(e) = write(sequence) {
                 self.sequence_failed(&e);
@@ -97,7 +97,7 @@ impl TensorBoardObserver {
     }
 
     /// Writes to the task in progress's log while it works.
-    fn to_task(&mut self, write: impl FnOnce(&mut ScalarLog) -> anyhow::Result<()>) {
+    fn write_task(&mut self, write: impl FnOnce(&mut ScalarLog) -> anyhow::Result<()>) {
         if let Some(task) = &mut self.task {
             if let Err(e) = write(task) {
                 self.task_failed(&e);
@@ -111,7 +111,7 @@ impl Observer for TensorBoardObserver {
         match event {
             Event::TaskStarted { step, name, .. } => {
                 // The previous task's writer is flushed and closed before this one opens.
-                self.to_task(|t| t.flush());
+                self.write_task(|t| t.flush());
                 self.task = None;
                 // A task redone after a resume starts its folder anew.
                 self.task_dir = self.root.join(format!("{step:02}-{}", task_file_name(name)));
@@ -126,14 +126,14 @@ impl Observer for TensorBoardObserver {
             }
             Event::Iteration { iteration, metrics, .. } => {
                 let scalars = || metrics.iter().map(|(k, v)| (k.as_str(), *v));
-                self.to_task(|t| t.write(*iteration as i64, scalars()));
+                self.write_task(|t| t.write(*iteration as i64, scalars()));
                 self.done += 1;
                 let done = self.done;
-                self.to_sequence(|s| s.write(done, scalars()));
+                self.write_sequence(|s| s.write(done, scalars()));
             }
             Event::TaskEnded { .. } => {
-                self.to_sequence(|s| s.flush());
-                self.to_task(|t| t.flush());
+                self.write_sequence(|s| s.flush());
+                self.write_task(|t| t.flush());
             }
             Event::Evaluated { evaluation, .. } => {
                 let name = &evaluation.report.task;
@@ -144,7 +144,7 @@ impl Observer for TensorBoardObserver {
                     (format!("eval/{name}/fall_rate"), evaluation.report.fall_rate),
                 ];
                 let done = self.done;
-                self.to_sequence(|s| s.write(done, tags.iter().map(|(t, v)| (t.as_str(), *v))));
+                self.write_sequence(|s| s.write(done, tags.iter().map(|(t, v)| (t.as_str(), *v))));
             }
             Event::Measures { summary, .. } => {
                 let measures = [
@@ -154,7 +154,7 @@ impl Observer for TensorBoardObserver {
                     ("eval/forward_transfer", summary.forward_transfer_mean),
                 ];
                 let done = self.done;
-                self.to_sequence(|s| {
+                self.write_sequence(|s| {
                     s.write(done, measures.iter().filter_map(|(t, v)| v.map(|v| (*t, v))))?;
                     s.flush()
                 });

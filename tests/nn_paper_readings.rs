@@ -10,9 +10,11 @@ use quadcl::nn::{AdamConfig, ElementState, MaskConfig, MaskedAdam, MaskedMlp};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-/// One Adam step of a fresh network's first task at the optimiser's rate `rate`: the
-/// (score means, weights) before and after, layer by layer.
-fn one_step(cfg: &MaskConfig, rate: f64) -> Vec<(Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>)> {
+/// A layer's (score means before, after, weights before, after) one step.
+type Step = (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>);
+
+/// One Adam step of a fresh network's first task at the optimiser's rate `rate`, layer by layer.
+fn one_step(cfg: &MaskConfig, rate: f64) -> Vec<Step> {
     let mut net = small_mlp(cfg, 5);
     let mut rng = ChaCha8Rng::seed_from_u64(6);
     net.begin_task(0, &[]).unwrap();
