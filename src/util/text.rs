@@ -5,11 +5,16 @@
 //!   a new line there (and with it a new key, directive or row);
 //! - [`clip`]: a value quoted in a message at most [`QUOTE_MAX`] characters, with its length
 //!   when cut;
-//! - [`error_text`]: an error's chain of causes for the terminal, each at most a few lines'
-//!   worth, and a context that only repeats its cause's words said once.
+//! - [`error_text`]: an error's chain of causes for the terminal, each line at most 400
+//!   characters and each cause at most a thousand, and a context that only repeats its
+//!   cause's words said once.
 
 /// The most characters of a value a message quotes.
 pub const QUOTE_MAX: usize = 200;
+
+/// The most characters one line of an error's cause keeps in [`error_text`] (quadcl's own
+/// sentences fit; a value echoed by a parser does not).
+const LINE_MAX: usize = 400;
 
 /// The most characters one cause of an error takes in [`error_text`].
 const CAUSE_MAX: usize = 1000;
@@ -57,9 +62,9 @@ pub fn error_text(err: &anyhow::Error) -> String {
     kept.join(": ")
 }
 
-/// Each line of `text` cut at [`QUOTE_MAX`] characters and the whole at [`CAUSE_MAX`].
+/// Each line of `text` cut at [`LINE_MAX`] characters and the whole at [`CAUSE_MAX`].
 fn clip_lines(text: &str) -> String {
-    let lines: Vec<String> = text.lines().map(|l| clip_to(l, QUOTE_MAX)).collect();
+    let lines: Vec<String> = text.lines().map(|l| clip_to(l, LINE_MAX)).collect();
     clip_to(&lines.join("\n"), CAUSE_MAX)
 }
 
