@@ -75,6 +75,15 @@ pub struct Runner {
     lock: FolderLock,
 }
 
+/// The run file `text` (read from `path`) as the run `prev` records read it: a run begun before
+/// issue 60 goes on as it ran (`RunConfig::load_text_as_ran_before_issue_60`, docs/method.md).
+fn load_as_run(prev: &MetricsFile, path: &Path, text: &str) -> anyhow::Result<RunConfig> {
+    match prev.ran_before_issue_60() {
+        true => RunConfig::load_text_as_ran_before_issue_60(path, text),
+        false => RunConfig::load_text(path, text),
+    }
+}
+
 impl Runner {
     /// Opens the run file `config` into `out` (see [`OpenMode`]). Every check (config,
     /// existing results, checkpoint) happens before anything is written. `echo`: log lines go to stderr too.
@@ -114,11 +123,7 @@ impl Runner {
         };
         let (cfg, previous) = if resume {
             let prev = MetricsFile::load(&dir.metrics_path())?;
-            // A run begun before issue 60 goes on as it ran (docs/method.md).
-            let read = |path: &Path, text: &str| match prev.ran_before_issue_60() {
-                true => RunConfig::load_text_as_ran_before_issue_60(path, text),
-                false => RunConfig::load_text(path, text),
-            };
+            let read = |path: &Path, text: &str| load_as_run(&prev, path, text);
             let cfg = read(config, &text)?;
             let stored_path = out.join(RUN_FILE);
             let stored = std::fs::read_to_string(&stored_path)
@@ -177,11 +182,7 @@ impl Runner {
         anyhow::ensure!(!dir.has_run(), "{} already holds a run: open it instead", out.display());
         let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
         let prev = MetricsFile::load(&prior.join(super::run_dir::METRICS_FILE))?;
-        // A run begun before issue 60 goes on as it ran (docs/method.md).
-        let read = |path: &Path, text: &str| match prev.ran_before_issue_60() {
-            true => RunConfig::load_text_as_ran_before_issue_60(path, text),
-            false => RunConfig::load_text(path, text),
-        };
+        let read = |path: &Path, text: &str| load_as_run(&prev, path, text);
         let cfg = read(config, &text)?;
         let prior_path = prior.join(RUN_FILE);
         let prior_text =

@@ -77,12 +77,18 @@ pub enum CellRun {
 }
 
 impl CellRun {
-    /// Why the cell is left out of a table (None: it is not).
-    pub fn left_out(&self, dir: &Path, cell: &Cell) -> Option<String> {
+    /// The cell's own run as `T` (the fields `T` names): Ok(None) before it has a
+    /// `metrics.json`; Err with why it is left out of every table when its folder holds another
+    /// run's results, a `metrics.json` that cannot be read, or one that is not `T`.
+    pub fn run<T: serde::de::DeserializeOwned>(&self, dir: &Path, cell: &Cell) -> Result<Option<T>, String> {
         let run = dir.join(&cell.run);
+        let unreadable = |problem: &str| format!("cell {} ({}): {problem}; left out", cell.index, run.display());
         match self {
-            CellRun::NotStarted | CellRun::Planned { .. } => None,
-            CellRun::Foreign { recorded } => Some(format!(
+            CellRun::NotStarted => Ok(None),
+            CellRun::Planned { path, text } => {
+                parse_metrics(path, text).map(Some).map_err(|e| unreadable(&crate::util::text::error_text(&e)))
+            }
+            CellRun::Foreign { recorded } => Err(format!(
                 "cell {} ({}): its {METRICS_FILE} records the run file sha256 {}…, not the {}… of {} that the \
                  plan holds: another run's results, left out",
                 cell.index,
@@ -91,9 +97,7 @@ impl CellRun {
                 short_hash(&cell.run_file_sha256),
                 cell.config
             )),
-            CellRun::Unreadable { problem } => {
-                Some(format!("cell {} ({}): {problem}; left out", cell.index, run.display()))
-            }
+            CellRun::Unreadable { problem } => Err(unreadable(problem)),
         }
     }
 }
@@ -144,14 +148,6 @@ pub fn load_finished<T: serde::de::DeserializeOwned>(dir: &Path, cell: &Cell) ->
         parse_metrics(&path, &text).map(Some)
     } else {
         Ok(None)
-    }
-}
-
-/// The measures of `cell`'s run, if its folder holds the planned run's (see [`read_cell`]).
-pub fn cell_measures(dir: &Path, cell: &Cell) -> Option<RunMeasures> {
-    match read_cell(dir, cell) {
-        CellRun::Planned { path, text } => parse_metrics(&path, &text).ok(),
-        _ => None,
     }
 }
 
@@ -239,24 +235,10 @@ pub fn collect(dir: &Path) -> anyhow::Result<Collected> {
         let mut cells = Vec::new();
         for &i in &indices {
             let cell = &plan.cells[i];
-            let found = read_cell(dir, cell);
-            let run = match &found {
-                CellRun::Planned { path, text } => match parse_metrics::<RunMeasures>(path, text) {
-                    Ok(r) => Some(r),
-                    Err(e) => {
-                        left_out.push(format!(
-                            "cell {i} ({}): {}; left out",
-                            dir.join(&cell.run).display(),
-                            crate::util::text::error_text(&e)
-                        ));
-                        None
-                    }
-                },
-                other => {
-                    left_out.extend(other.left_out(dir, cell));
-                    None
-                }
-            };
+            let run = read_cell(dir, cell).run::<RunMeasures>(dir, cell).unwrap_or_else(|why| {
+                left_out.push(why);
+                None
+            });
             let finished = run.as_ref().is_some_and(|r| r.finished());
             let measures = match &run {
                 Some(r) if finished => {

@@ -16,7 +16,7 @@
 //! a cell another has started or finished since, and each runs until no cell is
 //! left; a cell's marker is changed at its end only while it still names that run.
 
-use super::collect::read_cell;
+use super::collect::{read_cell, RunMeasures};
 use super::marker::{claim_lock, read_marker, running_elsewhere, write_marker, Marker};
 use super::plan::{Cell, Plan};
 use super::status::cell_finished;
@@ -80,9 +80,10 @@ pub fn run_local(dir: &Path, options: &LocalOptions, say: &mut dyn FnMut(&str)) 
     let mut report = LocalReport::default();
     let mut todo: Vec<&Cell> = Vec::new();
     for cell in &plan.cells {
-        if cell_finished(&dir, cell) {
+        let found = read_cell(&dir, cell).run::<RunMeasures>(&dir, cell);
+        if found.as_ref().is_ok_and(|run| run.as_ref().is_some_and(|m| m.finished())) {
             report.already_finished.push(cell.index);
-        } else if let Some(why) = read_cell(&dir, cell).left_out(&dir, cell) {
+        } else if let Err(why) = found {
             // Training it would have to resume another run: the folder is left as it is.
             say(&format!("{why}; not trained: move {} away to train the cell", dir.join(&cell.run).display()));
             report.failed.push(cell.index);

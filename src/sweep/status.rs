@@ -6,7 +6,7 @@
 //! when the sweep was submitted to Slurm and `squeue` / `sacct` answer, the
 //! scheduler's word (queued, running, failed).
 
-use super::collect::{cell_measures, read_cell, CellRun};
+use super::collect::{read_cell, RunMeasures};
 use super::marker::{read_marker, running_elsewhere, Marker};
 use super::plan::{Cell, Plan};
 use super::slurm::task_states;
@@ -78,7 +78,7 @@ impl CellStatus {
 /// Whether cell `cell` of the sweep in `dir` has trained its whole sequence (its own run: a
 /// folder holding another run's results has not).
 pub fn cell_finished(dir: &Path, cell: &Cell) -> bool {
-    cell_measures(dir, cell).is_some_and(|m| m.finished())
+    read_cell(dir, cell).run::<RunMeasures>(dir, cell).ok().flatten().is_some_and(|m| m.finished())
 }
 
 /// The status of every cell of the sweep in `dir`; `scheduler`: ask `squeue` and `sacct`
@@ -89,11 +89,9 @@ pub fn status(dir: &Path, scheduler: bool) -> anyhow::Result<Vec<CellStatus>> {
     let accounting = if scheduler { task_states(dir, "sacct") } else { None };
     let mut out = Vec::new();
     for cell in &plan.cells {
-        let found = read_cell(dir, cell);
-        let foreign = found.left_out(dir, cell);
-        let run = match &found {
-            CellRun::Planned { .. } => cell_measures(dir, cell),
-            _ => None,
+        let (run, foreign) = match read_cell(dir, cell).run::<RunMeasures>(dir, cell) {
+            Ok(run) => (run, None),
+            Err(why) => (None, Some(why)),
         };
         let completed = run.as_ref().map_or(0, |r| r.completed_steps);
         let total_steps = run.as_ref().map_or(cell.iterations.len(), |r| r.total_steps);
