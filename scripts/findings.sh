@@ -38,6 +38,7 @@ sweeps=(
   "fig8-plasticity|reinit_scores=none reinit_weights=false|0|"
   "fig4-budget|iterations=500 name=ours|0|"
   "ladder|arm=finetune|0|"
+  "ladder-candidates|arm=finetune|0|"
 )
 shift_file=scenes/findings/sim2real.shift.toml
 progress=policies/findings/progress

@@ -22,6 +22,7 @@ fn each_findings_sweep_plans_its_cells_with_three_seeds_per_variant() {
         ("fig8-plasticity", 12, 4),
         ("fig11-reference", 3, 1),
         ("ladder", 18, 6),
+        ("ladder-candidates", 18, 6),
         ("paper-shape", 12, 4),
     ] {
         let plan = check(&findings(name)).unwrap_or_else(|e| panic!("{name}: {e:#}"));
@@ -44,4 +45,18 @@ fn fig11_transfer_waits_for_its_reference_run_and_says_which() {
         let err = format!("{:#}", check(&findings("fig11-transfer")).unwrap_err());
         assert!(err.contains("fig11-reference/runs/0/metrics.json"), "{err}");
     }
+}
+
+#[test]
+fn the_ladders_fresh_weight_arms_redraw_the_bases_vacant_weights_and_refuse_a_dense_method() {
+    use quadcl::engine::{make_learner, RunConfig};
+    let path = findings("ladder-task");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let with = |extra: &str| text.replace("[run]\n", &format!("[run]\n{extra}"));
+    let learned = |t: &str| make_learner(&RunConfig::load_text(&path, t).unwrap()).map(|(_, tasks)| tasks);
+    let redrawn = with("base_vacant = \"redrawn\"\n");
+    assert_eq!(learned(&redrawn).unwrap(), learned(&text).unwrap(), "the base's tasks are kept");
+    let dense = redrawn.replace("name = \"ours\"", "name = \"finetune\"");
+    let err = format!("{:#}", learned(&dense).err().expect("a dense method has no vacant weights"));
+    assert!(err.contains("base_vacant") && err.contains("finetune"), "{err}");
 }

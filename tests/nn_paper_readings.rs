@@ -100,3 +100,36 @@ fn a_first_task_from_the_intact_network_selects_only_vacant_elements_and_trains_
         }
     }
 }
+
+#[test]
+fn a_redraw_of_vacant_weights_changes_only_vacant_ones_and_keeps_every_recall_bit_for_bit() {
+    let cfg = MaskConfig::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut net = small_mlp(&cfg, 12);
+    train_task(&mut net, 0, &tasks(1, 13)[0], 5, 1e-3, &mut rng);
+    let recall = bits(&net.forward_task(0, &probe()).unwrap());
+    let before: Vec<Vec<f32>> = net.layers().iter().map(|l| l.weight_values().unwrap()).collect();
+    for scale in [0.0, 0.1] {
+        let run = MaskConfig { reinit_scale: scale, ..cfg.clone() };
+        net.redraw_vacant_weights(&run, &mut rng).unwrap();
+        assert_eq!(bits(&net.forward_task(0, &probe()).unwrap()), recall, "task 0 recalls as before at {scale}");
+        for (layer, w0) in net.layers().iter().zip(&before) {
+            let w = layer.weight_values().unwrap();
+            // The initialiser's range over the full fan-in (`reinit_range = "initial"`), He-uniform.
+            let bound = (6.0 / layer.shape().1 as f32).sqrt() * scale as f32;
+            let mut vacant_nonzero = 0;
+            for ((w, w0), s) in w.iter().zip(w0).zip(layer.states()) {
+                if *s == ElementState::Vacant {
+                    assert!(w.abs() <= bound * 1.0001, "{}: a vacant weight {w} beyond {bound}", layer.name());
+                    vacant_nonzero += usize::from(*w != 0.0);
+                } else {
+                    assert_eq!(w.to_bits(), w0.to_bits(), "{}: a weight of task 0 moved", layer.name());
+                }
+            }
+            assert_eq!(vacant_nonzero > 0, scale > 0.0, "{}: at scale {scale}", layer.name());
+        }
+    }
+    // A task in progress keeps its weights: the redraw is for between tasks.
+    net.begin_task(1, &[]).unwrap();
+    assert!(net.redraw_vacant_weights(&cfg, &mut rng).is_err());
+}

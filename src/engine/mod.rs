@@ -36,7 +36,7 @@ pub use events::{ChannelObserver, Command, CommandSender, Event, EventLog, Obser
 pub use learner::{Evaluation, Learner, TaskStart};
 pub use ppo_learner::{make_ppo_learner, max_episode_return, max_reward_rate, PpoTaskLearner};
 pub use results::{CommandTracking, SessionResults, SoftScoreSettings, StepRecord, Summary, TaskCurve};
-pub use run_config::{EvalConfig, LearnerKind, RunConfig, RunSection};
+pub use run_config::{BaseVacant, EvalConfig, LearnerKind, RunConfig, RunSection};
 pub use run_dir::{
     lock_folder, task_file_name, MetricsFile, RunDir, CHECKPOINTS, CHOSEN_FILE, EPISODES, LOCK_FILE, LOG_FILE,
     METRICS_FILE, RUN_FILE,

@@ -15,7 +15,7 @@
 //! the method's state as `method.*` (its [`UpdateHooks::state`]).
 
 use super::learner::{Evaluation, Learner, TaskStart};
-use super::run_config::RunConfig;
+use super::run_config::{BaseVacant, RunConfig};
 use crate::config::net::MaskConfig;
 use crate::config::{Config, EnvConfig};
 use crate::nn::{
@@ -29,6 +29,8 @@ use crate::sim::Perturbation;
 use crate::util::{derive_seed, Stream};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::str::FromStr;
@@ -87,6 +89,16 @@ pub fn make_ppo_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Ve
         Some(dir) => learner.load(dir).with_context(|| format!("loading the base policy {}", dir.display()))?,
         None => Vec::new(),
     };
+    if cfg.run.base_vacant == BaseVacant::Redrawn {
+        anyhow::ensure!(
+            method.network_kind() == NetworkKind::Masked,
+            "[run] base_vacant = \"redrawn\": method {} trains dense networks, which have no vacant weights",
+            cfg.method
+        );
+        let mask = cfg.switches.apply(&cfg.config.net.mask)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(derive_seed(cfg.config.seed, Stream::BaseVacant));
+        learner.agent_mut().redraw_vacant_weights(&mask, &mut rng)?;
+    }
     Ok((Box::new(learner), learned))
 }
 

@@ -69,6 +69,22 @@ pub struct RunSection {
     /// Keep only the newest checkpoint (all a `--resume` needs; it recalls every
     /// task) instead of one per step, e.g. for a run committed under `policies/`.
     pub keep_last_checkpoint_only: bool,
+    /// What the base policy's VACANT weights are when the run starts: `as_saved` (the default:
+    /// drawn when the base's last task ended, at the base's own fresh-weight range), or
+    /// `redrawn` at this run's (`[net.mask] reinit_range` times `reinit_scale`, 0: zero), so a
+    /// first task's fresh weights follow the run's reading (docs/method.md). Masked methods only.
+    pub base_vacant: BaseVacant,
+}
+
+/// `[run] base_vacant`: the base policy's vacant weights at the run's start.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BaseVacant {
+    /// As the base policy saved them.
+    #[default]
+    AsSaved,
+    /// Redrawn at the run's fresh-weight range and scale.
+    Redrawn,
 }
 
 /// Everything a run needs.
@@ -196,6 +212,11 @@ impl RunConfig {
         // Without a base policy nothing is learned before the sequence: every related task
         // must come earlier in it. With one, its tasks are checked once it is loaded.
         if run.base_policy.is_none() {
+            anyhow::ensure!(
+                run.base_vacant == BaseVacant::AsSaved,
+                "[run] base_vacant = \"redrawn\" needs a base policy ([run] base_policy): without one every \
+                 weight is drawn at [net.mask]'s range already"
+            );
             sequence.validate_with(KnownBefore::Tasks(Vec::new()))?;
         }
         Ok(Self { config, method, method_settings, switches, eval, run, sequence })

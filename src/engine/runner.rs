@@ -43,6 +43,10 @@ pub fn make_learner(cfg: &RunConfig) -> anyhow::Result<(Box<dyn Learner>, Vec<St
     let mask = cfg.switches.apply(&cfg.config.net.mask)?;
     match cfg.run.learner {
         LearnerKind::Toy => {
+            anyhow::ensure!(
+                cfg.run.base_vacant == super::run_config::BaseVacant::AsSaved,
+                "[run] base_vacant = \"redrawn\": the PPO learner only (this run's learner is the toy)"
+            );
             let method = crate::cl::method_by_name(&cfg.method, &cfg.method_settings)?;
             let mut learner = ToyLearner::new_of_kind(&mask, cfg.config.seed, method.network_kind())?
                 .with_hooks(method.update_hooks());

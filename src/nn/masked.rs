@@ -425,19 +425,7 @@ impl MaskedLinear {
     /// draws exactly what the layer drew before issue 31).
     fn reinitialise(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
         if self.cfg.reinit_weights {
-            let range = match self.cfg.reinit_range {
-                ReinitRange::Initial => self.full_fan_in_bound,
-                ReinitRange::HeEffective => self.init_bound,
-            };
-            let bound = range * self.cfg.reinit_scale as f32;
-            let dist = Uniform::new_inclusive(-bound, bound);
-            let mut w = var_values(&self.weight)?;
-            for (w, s) in w.iter_mut().zip(&self.states) {
-                if *s == ElementState::Vacant {
-                    *w = dist.sample(rng);
-                }
-            }
-            set_var(&self.weight, w)?;
+            self.redraw_vacant_weights(self.cfg.reinit_range, self.cfg.reinit_scale, rng)?;
         }
         let redraw = |s: &ElementState| match self.cfg.reinit_scores {
             ScoreReinit::All => true,
@@ -455,6 +443,26 @@ impl MaskedLinear {
             set_var(&self.score_mean, mu)?;
         }
         Ok(())
+    }
+
+    /// Every VACANT weight redrawn uniformly from `range` times `scale` (0: zero), one draw per
+    /// vacant element in row-major order; occupied and private weights are untouched, so every
+    /// learned task recalls as before. The end of a task's `reinit_weights`, and a base policy's
+    /// vacant weights at a run's start (`[run] base_vacant = "redrawn"`, docs/method.md).
+    pub fn redraw_vacant_weights(&mut self, range: ReinitRange, scale: f64, rng: &mut impl Rng) -> anyhow::Result<()> {
+        let range = match range {
+            ReinitRange::Initial => self.full_fan_in_bound,
+            ReinitRange::HeEffective => self.init_bound,
+        };
+        let bound = range * scale as f32;
+        let dist = Uniform::new_inclusive(-bound, bound);
+        let mut w = var_values(&self.weight)?;
+        for (w, s) in w.iter_mut().zip(&self.states) {
+            if *s == ElementState::Vacant {
+                *w = dist.sample(rng);
+            }
+        }
+        set_var(&self.weight, w)
     }
 
     /// The rule in use (for statistics).

@@ -295,6 +295,15 @@ impl MaskedMlp {
         self.layers.iter().flat_map(|l| l.parameters()).collect()
     }
 
+    /// Every layer's vacant weights redrawn ([`MaskedLinear::redraw_vacant_weights`]) at the
+    /// range and scale `cfg` gives fresh weights (`reinit_range`, `reinit_scale`); between tasks only.
+    pub fn redraw_vacant_weights(&mut self, cfg: &MaskConfig, rng: &mut impl Rng) -> anyhow::Result<()> {
+        if let Some(current) = self.current_task() {
+            anyhow::bail!("{}: vacant weights redrawn while task {current} is in progress", self.name);
+        }
+        self.layers.iter_mut().try_for_each(|l| l.redraw_vacant_weights(cfg.reinit_range, cfg.reinit_scale, rng))
+    }
+
     /// End of task (METHOD 2.4).
     pub fn end_task(&mut self, rng: &mut impl Rng) -> anyhow::Result<()> {
         self.layers.iter_mut().try_for_each(|l| l.end_task(rng))

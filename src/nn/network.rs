@@ -118,6 +118,15 @@ impl Network {
         }
     }
 
+    /// Every vacant weight redrawn at `cfg`'s fresh-weight range ([`MaskedMlp::redraw_vacant_weights`]);
+    /// a dense network has no vacant weights and refuses.
+    pub fn redraw_vacant_weights(&mut self, cfg: &MaskConfig, rng: &mut impl rand::Rng) -> anyhow::Result<()> {
+        match self {
+            Self::Masked(n) => n.redraw_vacant_weights(cfg, rng),
+            Self::Dense(n) => anyhow::bail!("{}: a dense network has no vacant weights to redraw", n.name()),
+        }
+    }
+
     /// Scales the output layer's (or initial head's) initial weights; only before the first task.
     pub fn scale_output_init(&mut self, factor: f32) -> anyhow::Result<()> {
         match self {

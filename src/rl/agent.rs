@@ -209,6 +209,12 @@ impl Agent {
         self.networks_mut().into_iter().try_for_each(|net| net.set_end_of_task(mask))
     }
 
+    /// Every network's vacant weights redrawn at `mask`'s fresh-weight range and scale, between
+    /// tasks (`[run] base_vacant = "redrawn"`); what every learned task recalls is unchanged.
+    pub fn redraw_vacant_weights(&mut self, mask: &crate::nn::MaskConfig, rng: &mut impl Rng) -> anyhow::Result<()> {
+        self.networks_mut().into_iter().try_for_each(|net| net.redraw_vacant_weights(mask, rng))
+    }
+
     /// Starts training `task` (METHOD 2.1; a finished task => fine-tuning).
     /// The observation statistics follow the data again.
     pub fn begin_task(&mut self, task: TaskId, related: &[TaskId]) -> anyhow::Result<()> {

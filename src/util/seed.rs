@@ -34,6 +34,9 @@ pub enum Stream {
     /// The resampling of seeds behind a sweep's bootstrap intervals (`quadcl sweep collect`).
     /// Derived from a fixed seed, so a collected table is the same every time.
     Bootstrap,
+    /// The redraw of a base policy's vacant weights (`[run] base_vacant = "redrawn"`). Derived
+    /// from the master seed.
+    BaseVacant,
 }
 
 /// The seed of `stream`, derived from `seed` (the master seed or the seed the
@@ -51,6 +54,7 @@ pub fn derive_seed(seed: u64, stream: Stream) -> u64 {
         Stream::Sim2RealTrain => mix(seed, 20, 0),
         Stream::Sim2RealEval(task) => mix(seed, 21, task as u64),
         Stream::Bootstrap => mix(seed, 30, 0),
+        Stream::BaseVacant => mix(seed, 40, 0),
     }
 }
 
@@ -86,6 +90,7 @@ mod tests {
             Stream::Sim2RealTrain,
             Stream::Sim2RealEval(0),
             Stream::Bootstrap,
+            Stream::BaseVacant,
         ];
         let seeds: Vec<u64> = streams.iter().map(|&s| derive_seed(7, s)).collect();
         for (i, a) in seeds.iter().enumerate() {
