@@ -16,9 +16,10 @@
 //! | [`export`] | a learned task as plain dense networks for deployment: ONNX and PyTorch-named safetensors with the robot's contract as metadata | `config`, `util`, `sim`, `nn`, `rl` |
 //! | [`cl`] | continual learning around the learner: the method's hooks and switches, sequences, the continual measures | `config`, `util`, `sim`, `nn`, `rl` |
 //! | [`engine`] | a `Session` trains a learner on a sequence step by step and emits events; the PPO and toy learners, run files and folders, sim-to-real fine-tuning | `config`, `util`, `sim`, `nn`, `rl`, `cl`, `record`, `log` |
-//! | [`plot`] | figures of runs as PNG and SVG (`quadcl plot`): training curves, the whole sequence, the evaluation matrix, plasticity; a sweep folder as its groups across seeds | `util`, `cl`, `sweep` |
+//! | [`plot`] | figures of runs as PNG and SVG (`quadcl plot`): training curves, the whole sequence, the evaluation matrix, plasticity; a sweep folder as its groups across seeds | `util`, `cl`, `sweep`, `render` |
 //! | [`headless`] | `quadcl run`: a run file to the end with a progress bar, results and checkpoints, resumable | `util`, `rl`, `cl`, `engine`, `record`, `log` |
-//! | [`record`] | recorders of simulation steps: episodes as MCAP for Foxglove and as Rerun `.rrd` or a live Rerun viewer (`quadcl record`, `quadcl view`) | `util`, `config`, `sim`, `nn`, `rl` |
+//! | [`render`] | pictures without a GPU: a ray-cast frame of a `LocomotionEnv` from a tracking camera, text on frames, PNG, MP4 through ffmpeg; the one font | `util`, `sim` |
+//! | [`record`] | recorders of simulation steps: episodes as MCAP for Foxglove and as Rerun `.rrd` or a live Rerun viewer (`quadcl record`, `quadcl view`) | `util`, `config`, `sim`, `nn`, `rl`, `render` |
 //! | [`sweep`] | grids of runs: a sweep file planned into cells, run here (child processes) or as a Slurm array job, status, collected with bootstrap intervals over seeds | `util`, `engine` |
 //! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread, the Sweep screen | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record`, `sweep` |
 //!
@@ -48,6 +49,7 @@ pub mod log;
 pub mod nn;
 pub mod plot;
 pub mod record;
+pub mod render;
 pub mod rl;
 pub mod sim;
 pub mod sweep;

@@ -195,6 +195,7 @@ fn a_run_whose_tasks_train_nothing_or_whose_settings_select_nothing_names_the_fi
         (format!("[method.ewc]\nfisher_samples = 100000000\n{task}"), "[method.ewc] fisher_samples"),
         (format!("[method.si]\nc = nan\n{task}"), "[method.si] c"),
         (format!("[run]\nbase_vacant = \"redrawn\"\n{task}"), "base_vacant = \"redrawn\" needs a base policy"),
+        (format!("[run]\nlearner = \"toy\"\nvideos = true\n{task}"), "videos = true needs the PPO learner"),
     ] {
         let err = load_error(dir.path(), "bad-run.toml", &text, quadcl::engine::RunConfig::load)
             .unwrap_or_else(|| panic!("{text}: accepted"));

@@ -27,3 +27,23 @@ def seed_of(seed, np_random):
     if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     return int(seed)
+
+
+RENDER_MODES = ("rgb_array",)
+
+
+def check_render(render_mode, width, height):
+    """``render_mode`` None or one of ``RENDER_MODES``, and a picture size of positive ints."""
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(
+            f"render_mode {render_mode!r} is not supported: quadcl renders {list(RENDER_MODES)} "
+            "(frames as (height, width, 3) uint8, drawn on the CPU) or None"
+        )
+    for name, v in (("width", width), ("height", height)):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise ValueError(f"{name} must be a positive integer, got {v!r}")
+
+
+def closed(what):
+    """The error of a call on a closed environment."""
+    return RuntimeError(f"this {what} is closed: make a new one to step, reset or render again")

@@ -15,12 +15,17 @@ from .vector import WIDTH, env_settings
 
 class Policy:
     """A learned task's deterministic policy: (N, 225) or (225,) float32 observations
-    to (N, 12) or (12,) action means."""
+    to (N, 12) or (12,) action means.
+
+    ``task`` is the task asked for; ``recalls`` the learned task whose network acts: the same
+    task when the policy learned it, else (zero-shot: a base policy on a perturbation, a
+    checkpoint from before the task) its last learned task."""
 
     def __init__(self, path, task):
         self._native = _native.NativePolicy(str(path), str(task))
         self.path = self._native.path
         self.task = self._native.task
+        self.recalls = self._native.recalls
         self.tasks = self._native.tasks
         self.env_toml = self._native.env_toml
 
@@ -36,11 +41,12 @@ class Policy:
         return actions[0] if single else actions
 
     def __repr__(self):
-        return f"Policy({self.path!r}, task={self.task!r}, tasks={self.tasks})"
+        return f"Policy({self.path!r}, task={self.task!r}, recalls={self.recalls!r}, tasks={self.tasks})"
 
 
 def load_policy(path, task):
-    """The policy that ``path`` (a policy directory or a run's checkpoint) learned for ``task``."""
+    """The policy that ``path`` (a policy directory or a run's checkpoint) learned for ``task``;
+    for a task it never learned, its last learned task's (``Policy.recalls`` names it)."""
     return Policy(path, task)
 
 

@@ -67,6 +67,13 @@ impl NativePolicy {
         self.task.clone()
     }
 
+    /// The learned task whose network acts: `task` when the policy learned it, else (zero-shot:
+    /// a base policy on a perturbation, a checkpoint from before the task) its last learned task.
+    #[getter]
+    fn recalls(&self) -> Option<String> {
+        self.loaded.recalled_task().map(str::to_string)
+    }
+
     /// The tasks the policy directory holds.
     #[getter]
     fn tasks(&self) -> Vec<String> {

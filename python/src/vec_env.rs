@@ -18,10 +18,12 @@
 
 use crate::guard;
 use crate::settings::{env_from_toml, parse_task};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArray4, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use quadcl::render::{render, Camera, Scene};
 use quadcl::sim::{RobotModel, VecEnv, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
+use rayon::prelude::*;
 use std::sync::{Mutex, MutexGuard};
 
 const WIDTH: usize = HISTORY_LEN * OBS_DIM;
@@ -160,6 +162,44 @@ impl NativeVecEnv {
             matrix(py, env.obs_histories().to_vec(), WIDTH)?,
             matrix(py, env.privileged_observations().to_vec(), PRIV_OBS_DIM)?,
         ))
+    }
+
+    /// Pictures of the envs `envs` (all when None) as they stand, from the tracking camera of
+    /// `quadcl record` (`quadcl::render`, on the CPU): (K, height, width, 3) uint8, RGB.
+    #[pyo3(signature = (width, height, envs=None))]
+    fn render<'py>(
+        &mut self,
+        py: Python<'py>,
+        width: usize,
+        height: usize,
+        envs: Option<Vec<usize>>,
+    ) -> PyResult<Bound<'py, PyArray4<u8>>> {
+        let scenes = guard("render", || {
+            let env = self.env();
+            let n = env.num_envs();
+            let wanted = envs.unwrap_or_else(|| (0..n).collect());
+            if let Some(bad) = wanted.iter().find(|&&i| i >= n) {
+                anyhow::bail!("render: env {bad} of a batch of {n}");
+            }
+            Ok(wanted.iter().map(|&i| Scene::of_env(&env.envs()[i])).collect::<Vec<_>>())
+        })?;
+        let k = scenes.len();
+        let bytes = py.detach(|| {
+            guard("render", || {
+                let draw = || {
+                    scenes
+                        .par_iter()
+                        .map(|s| render(s, &Camera::default(), width, height))
+                        .collect::<anyhow::Result<Vec<_>>>()
+                };
+                let frames = match &self.pool {
+                    Some(pool) => pool.install(draw)?,
+                    None => draw()?,
+                };
+                Ok(frames.into_iter().flat_map(|f| f.rgb).collect::<Vec<u8>>())
+            })
+        })?;
+        PyArray1::from_vec(py, bytes).reshape([k, height, width, 3])
     }
 
     /// Steps every env with its row of `actions` (N, ACT_DIM) f32; envs that end are reset.

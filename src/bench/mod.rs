@@ -7,6 +7,7 @@ pub mod gemm;
 pub mod nn;
 pub mod ppo;
 pub mod record;
+pub mod render;
 pub mod tui;
 
 /// CPU seconds (user + system) from a Linux `/proc/.../stat` file: `/proc/self/stat` for the

@@ -14,14 +14,14 @@ pub struct BenchArgs {
     /// Seconds to spend on each measurement (at most 600).
     #[arg(long, default_value_t = 2.0)]
     pub seconds: f64,
-    /// Only these sections (comma-separated: env, accuracy, nn, ppo, record, tui); all by default.
+    /// Only these sections (comma-separated: env, accuracy, nn, ppo, record, render, tui); all by default.
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<String>,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     bounds::check("--seconds", args.seconds, Interval::OpenClosed(0.0, MAX_BENCH_SECONDS))?;
-    const SECTIONS: [&str; 6] = ["env", "accuracy", "nn", "ppo", "record", "tui"];
+    const SECTIONS: [&str; 7] = ["env", "accuracy", "nn", "ppo", "record", "render", "tui"];
     if let Some(bad) = args.only.iter().find(|s| !SECTIONS.contains(&s.as_str())) {
         anyhow::bail!("--only: unknown section {bad:?} (sections: {})", SECTIONS.join(", "));
     }
@@ -42,6 +42,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     }
     if wanted("record") {
         crate::bench::record::measure(args.seconds, &mut report)?;
+    }
+    if wanted("render") {
+        crate::bench::render::measure(args.seconds, &mut report)?;
     }
     if wanted("tui") {
         crate::bench::tui::measure(args.seconds, &mut report)?;

@@ -1,17 +1,20 @@
-//! `quadcl eval --policy DIR --task TASK [--episodes N] [--seed S] --json`:
+//! `quadcl eval --policy DIR --task TASK [--episodes N] [--seed S] [--video DIR] --json`:
 //! one episode per environment with the deterministic policy, random
 //! commands from the env config (vx in [-1, 1] m/s, wz in [-pi/2, pi/2] rad/s
 //! by default) and the training config's randomisation and pushes (`--no-pushes`
 //! turns the pushes off; `--push-interval-s` and `--push-max-vel` set another
 //! push regime, e.g. to score policies trained under different pushes on the
 //! same test); prints mean return, normalised performance (over the best return a task
-//! allows, as metrics.json has it), tracking errors, fall rate, survival.
+//! allows, as metrics.json has it), tracking errors, fall rate, survival, and which learned
+//! task's network acted (`recalls`: a task the policy never learned is run zero-shot with its
+//! last learned task's). `--video DIR` adds `DIR/TASK.mp4` of the policy on the task.
 //! `--policy-cmd CMD` takes the actions from another program instead (an exported
 //! model in ONNX Runtime: `rl::ExternalPolicy` says the protocol), in the
 //! environments the policy directory's config describes.
 
 use clap::Args;
 use quadcl::config::bounds::{self, NON_NEGATIVE};
+use quadcl::record::{record_video, RecordOptions, VideoSize};
 use quadcl::rl::SimTrainEnv;
 use quadcl::sim::Perturbation;
 use std::path::PathBuf;
@@ -52,6 +55,10 @@ pub struct EvalArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Also write a video of the policy on the task into this folder (`TASK.mp4`, 10 s at
+    /// 480 x 360, the evaluation's seed and random commands, no pushes; through ffmpeg).
+    #[arg(long, value_name = "DIR")]
+    pub video: Option<PathBuf>,
 }
 
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
@@ -90,6 +97,15 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let mut value = serde_json::to_value(&report)?;
     let fields = value.as_object_mut().expect("a struct serialises to an object");
     fields.insert("performance".into(), (report.mean_return / quadcl::engine::max_episode_return(env_cfg)).into());
+    // Which learned task's network acted: the task asked for, or (a task the policy never
+    // learned: zero-shot) its last learned one.
+    fields.insert("recalls".into(), loaded.recalled_task().into());
+    if let Some(dir) = &args.video {
+        let out = dir.join(format!("{}.mp4", quadcl::engine::task_file_name(&task.to_string())));
+        let options = RecordOptions { seconds: 10.0, episodes: None, command: None, seed: args.seed, force: true };
+        record_video(&args.policy, &[task.to_string()], &out, VideoSize::default(), &options)?;
+        fields.insert("video".into(), out.display().to_string().into());
+    }
     if args.json {
         println!("{value}");
     } else {

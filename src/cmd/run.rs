@@ -20,7 +20,7 @@ pub struct RunArgs {
     /// Stop after this many completed tasks (continue later with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
-    /// After each task, record one evaluation episode of every learned task into DIR/episodes/ (`mcap`: Foxglove, `rrd`: Rerun).
+    /// After each task, record one evaluation episode of every learned task into DIR/episodes/ (`mcap`: Foxglove, `rrd`: Rerun, `mp4`: a video).
     #[arg(long, value_name = "mcap|rrd")]
     pub record: Option<quadcl::record::RecordFormat>,
     /// Train with this method instead of the run file's [method] name: ours, wsn, packnet, piggyback, finetune, ewc, si, rwalk, er, agem

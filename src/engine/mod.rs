@@ -41,7 +41,7 @@ pub use run_dir::{
     lock_folder, task_file_name, MetricsFile, RunDir, CHECKPOINTS, CHOSEN_FILE, EPISODES, LOCK_FILE, LOG_FILE,
     METRICS_FILE, RUN_FILE,
 };
-pub use runner::{make_learner, OpenMode, Runner};
+pub use runner::{make_learner, OpenMode, Runner, VIDEOS};
 pub use session::{ChosenSettings, Session, StepOutcome};
 pub use shift::{DelayedActions, Shift};
 pub use sim2real::{sim2real, Sim2RealReport};

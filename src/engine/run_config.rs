@@ -74,6 +74,10 @@ pub struct RunSection {
     /// `redrawn` at this run's (`[net.mask] reinit_range` times `reinit_scale`, 0: zero), so a
     /// first task's fresh weights follow the run's reading (docs/method.md). Masked methods only.
     pub base_vacant: BaseVacant,
+    /// After each task, a short video of the task just learned (`videos/TASK.mp4`: 6 s at
+    /// 320 x 240, the env's random commands; rendered on the CPU and encoded by an `ffmpeg` on
+    /// PATH). A video that fails (no ffmpeg) is a warning in the log, never the run's failure.
+    pub videos: bool,
 }
 
 /// `[run] base_vacant`: the base policy's vacant weights at the run's start.
@@ -211,6 +215,10 @@ impl RunConfig {
         };
         // Without a base policy nothing is learned before the sequence: every related task
         // must come earlier in it. With one, its tasks are checked once it is loaded.
+        anyhow::ensure!(
+            !(run.videos && run.learner == LearnerKind::Toy),
+            "[run] videos = true needs the PPO learner: a [run] learner = \"toy\" run has no robot to film"
+        );
         if run.base_policy.is_none() {
             anyhow::ensure!(
                 run.base_vacant == BaseVacant::AsSaved,

@@ -20,12 +20,18 @@ use super::run_dir::{task_file_name, MetricsFile, RunDir, CHOSEN_FILE, EPISODES,
 use super::session::{ChosenSettings, Session, StepOutcome};
 use super::toy_learner::ToyLearner;
 use crate::cl::TaskSpec;
-use crate::record::{record_episodes, RecordFormat, RecordOptions};
+use crate::record::{record_episodes, record_video, RecordFormat, RecordOptions, VideoSize};
+
 use crate::util::{replace_dir, write_atomic, FolderLock, Provenance};
 use anyhow::Context;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
+
+/// `[run] videos`: the folder of the videos, each one's length and picture size.
+pub const VIDEOS: &str = "videos";
+const VIDEO_SECONDS: f64 = 6.0;
+const VIDEO_SIZE: VideoSize = VideoSize { width: 320, height: 240 };
 
 /// How [`Runner::open`] treats the output folder.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -71,6 +77,8 @@ pub struct Runner {
     base_policy: Option<PathBuf>,
     /// Record one evaluation episode of every learned task after each step (`--record mcap|rrd`).
     record: Option<RecordFormat>,
+    /// `[run] videos`.
+    videos: bool,
     learner: LearnerKind,
     seed: u64,
     episode_s: f64,
@@ -264,6 +272,7 @@ impl Runner {
             keep_last_checkpoint_only: cfg.run.keep_last_checkpoint_only,
             base_policy: cfg.run.base_policy.clone(),
             record: None,
+            videos: cfg.run.videos,
             learner: cfg.run.learner,
             seed: cfg.config.seed,
             episode_s: f64::from(cfg.config.env.episode_s),
@@ -299,7 +308,7 @@ impl Runner {
     }
 
     /// After each step, record one evaluation episode of every learned task as `format` into
-    /// `episodes/step-NN-TASK/TASK.mcap` (or `.rrd`; the PPO learner only: its checkpoints are policies).
+    /// `episodes/step-NN-TASK/TASK.mcap` (or `.rrd`, `.mp4`; the PPO learner only: its checkpoints are policies).
     pub fn record_episodes(&mut self, format: Option<RecordFormat>) -> anyhow::Result<()> {
         anyhow::ensure!(
             format.is_none() || self.learner == LearnerKind::Ppo,
@@ -331,6 +340,24 @@ impl Runner {
             )
             .with_context(|| format!("recording {name} after step {step}"))?;
         }
+        Ok(())
+    }
+
+    /// `[run] videos`: `videos/TASK.mp4` of the task step `step` learned, from its checkpoint.
+    fn video_step(&self, step: usize) -> anyhow::Result<()> {
+        let results = self.session.results();
+        let name = &results.steps[step].name;
+        let checkpoint = self.dir.checkpoint(step, name);
+        let t = results.tasks.iter().position(|n| n == name).context("the step's task is in the sequence")?;
+        let options = RecordOptions {
+            seconds: VIDEO_SECONDS,
+            episodes: None,
+            command: None,
+            seed: crate::util::derive_seed(self.seed, crate::util::Stream::SequenceEval(t)),
+            force: true,
+        };
+        let out = self.dir.root.join(VIDEOS).join(format!("{}.mp4", task_file_name(name)));
+        record_video(&checkpoint, std::slice::from_ref(name), &out, VIDEO_SIZE, &options)?;
         Ok(())
     }
 
@@ -387,6 +414,16 @@ impl Runner {
         self.save()?;
         if let Some(format) = self.record {
             self.record_step(step, format)?;
+        }
+        if self.videos {
+            if let Err(e) = self.video_step(step) {
+                let line = format!("warning: no video of step {step}: {}\n", crate::util::text::error_text(&e));
+                eprint!("{line}");
+                if let Ok(mut l) = self.lines.lock() {
+                    l.push_str(&line);
+                }
+                self.dir.write_log(&self.log_text())?;
+            }
         }
         let results = self.session.results();
         if self.keep_last_checkpoint_only && step > 0 {

@@ -16,7 +16,7 @@
 //! `metrics.json` or a training's `metrics.jsonl`) and a plotters drawing area; [`Figure`]
 //! names them. A [`Curve`] may carry a band (low, high per point), drawn shaded, for a spread
 //! over seeds: a sweep folder is drawn one run per group, the seeds' mean with their range
-//! (`seeds`). Text is DejaVu Sans, compiled in (`style`; licence in `DejaVuSans.LICENSE`).
+//! (`seeds`). Text is DejaVu Sans, compiled in (`render::font`; licence in `src/render/DejaVuSans.LICENSE`).
 //!
 //! `metrics.json` keeps only the finite values of a measure, not the iterations they came
 //! from; a measure with fewer values than its step ran iterations (the tracking errors and

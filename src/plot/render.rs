@@ -30,14 +30,7 @@ pub fn render_png(figure: Figure, runs: &[RunData], options: &PlotOptions) -> an
         figure.draw(&root, runs, options)?;
         root.present()?;
     }
-    let mut bytes = Vec::new();
-    let mut encoder = png::Encoder::new(&mut bytes, w, h);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().context("encoding the PNG")?;
-    writer.write_image_data(&rgb).context("encoding the PNG")?;
-    writer.finish().context("encoding the PNG")?;
-    Ok(bytes)
+    crate::render::encode_png(&rgb, w, h)
 }
 
 /// `figure` of `runs` as an SVG document.

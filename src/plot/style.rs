@@ -1,26 +1,8 @@
-//! The figures' look, in one place: the font (DejaVu Sans, compiled in and registered with
-//! plotters' ab_glyph text renderer, so no system font library is needed), text sizes, the
-//! series colours and the colour scales of the evaluation matrix.
-//!
-//! The font is `DejaVuSans.ttf` beside this file, DejaVu fonts 2.37, unmodified; its licence
-//! (Bitstream Vera's, DejaVu's changes in the public domain) is `DejaVuSans.LICENSE` beside it.
+//! The figures' look, in one place: the font (DejaVu Sans, compiled in: `render::font`), text
+//! sizes, the series colours and the colour scales of the evaluation matrix.
 
-use plotters::style::{FontStyle, IntoFont, RGBColor, TextStyle};
-use std::sync::OnceLock;
-
-/// The family name the font is registered under (SVG files name it too, so a viewer without
-/// DejaVu Sans shows its own sans-serif).
-pub const FONT: &str = "sans-serif";
-
-static FONT_BYTES: &[u8] = include_bytes!("DejaVuSans.ttf");
-
-/// Registers the font with plotters, once per process; every figure calls it before drawing.
-pub fn register_font() -> anyhow::Result<()> {
-    static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok());
-    anyhow::ensure!(ok, "the compiled-in font src/plot/DejaVuSans.ttf did not load");
-    Ok(())
-}
+pub use crate::render::font::{register_font, FONT};
+use plotters::style::{IntoFont, RGBColor, TextStyle};
 
 /// Text of `size` pixels, black.
 pub fn text(size: f64) -> TextStyle<'static> {

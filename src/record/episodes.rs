@@ -1,5 +1,5 @@
 //! `quadcl record` and `quadcl view`: a policy's episodes on a task, recorded
-//! into a file by its extension (`.mcap` for Foxglove, `.rrd` for Rerun) or
+//! into a file by its extension (`.mcap` for Foxglove, `.rrd` for Rerun, `.mp4` a video) or
 //! streamed to a Rerun viewer. The policy runs deterministically in one env
 //! (no pushes, nominal physics) under a held command or the env's own random
 //! commands, for a number of seconds or of finished episodes, whichever comes
@@ -42,6 +42,8 @@ pub enum RecordFormat {
     Mcap,
     /// Rerun's `.rrd`.
     Rrd,
+    /// An MP4 video (H.264), rendered on the CPU.
+    Mp4,
 }
 
 impl RecordFormat {
@@ -50,6 +52,7 @@ impl RecordFormat {
         match self {
             RecordFormat::Mcap => "mcap",
             RecordFormat::Rrd => "rrd",
+            RecordFormat::Mp4 => "mp4",
         }
     }
 }
@@ -60,7 +63,8 @@ impl std::str::FromStr for RecordFormat {
         match s {
             "mcap" => Ok(RecordFormat::Mcap),
             "rrd" => Ok(RecordFormat::Rrd),
-            other => anyhow::bail!("unknown recording format {other:?} (use mcap or rrd)"),
+            "mp4" => Ok(RecordFormat::Mp4),
+            other => anyhow::bail!("unknown recording format {other:?} (use mcap, rrd or mp4)"),
         }
     }
 }
@@ -76,11 +80,14 @@ pub struct RecordSummary {
 }
 
 /// Records `policy` (any policy directory form `quadcl eval` takes) on `task` into `out`
-/// (`.mcap` or `.rrd`).
+/// (`.mcap`, `.rrd`, or `.mp4`: a video at the default size, [`super::video::record_video`]).
 pub fn record_episodes(policy: &Path, task: &str, out: &Path, o: &RecordOptions) -> anyhow::Result<RecordSummary> {
+    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if ext == "mp4" {
+        return super::video::record_video(policy, &[task.to_string()], out, Default::default(), o);
+    }
     check_options(o)?;
     refuse_existing(out, o.force, "--out")?;
-    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
     let viewer = RobotViewer::new(policy, task, o.seed, o.command)?;
     let recorder = match ext {
         "mcap" => Recorder::mcap(out, viewer.env().robot())?,
@@ -88,7 +95,7 @@ pub fn record_episodes(policy: &Path, task: &str, out: &Path, o: &RecordOptions)
         "rrd" => Recorder::rerun(&[RerunSink::Save(out.to_path_buf())], viewer.env().robot(), &scene(&viewer, policy))?,
         #[cfg(not(feature = "rerun"))]
         "rrd" => anyhow::bail!("{}: this build of quadcl has no Rerun (its `rerun` feature is off)", out.display()),
-        other => anyhow::bail!("{}: unknown recording format {other:?} (use .mcap or .rrd)", out.display()),
+        other => anyhow::bail!("{}: unknown recording format {other:?} (use .mcap, .rrd or .mp4)", out.display()),
     };
     let mut summary =
         run(viewer, recorder, o, false).with_context(|| format!("recording {task} into {}", out.display()))?;
@@ -113,7 +120,7 @@ pub fn view_policy(policy: &Path, task: &str, sinks: &[RerunSink], o: &RecordOpt
 }
 
 /// An existing `out` is kept unless `force`; `flag` names the option that chose it.
-fn refuse_existing(out: &Path, force: bool, flag: &str) -> anyhow::Result<()> {
+pub(super) fn refuse_existing(out: &Path, force: bool, flag: &str) -> anyhow::Result<()> {
     anyhow::ensure!(
         force || !out.exists(),
         "{} exists: pass --force to replace it, or choose another {flag}",
@@ -122,7 +129,7 @@ fn refuse_existing(out: &Path, force: bool, flag: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn check_options(o: &RecordOptions) -> anyhow::Result<()> {
+pub(super) fn check_options(o: &RecordOptions) -> anyhow::Result<()> {
     bounds::check("--seconds", o.seconds, Interval::OpenClosed(0.0, MAX_SECONDS))?;
     anyhow::ensure!(o.episodes != Some(0), "--episodes must be at least 1");
     if let Some(command) = o.command {
@@ -176,10 +183,10 @@ mod tests {
 
     #[test]
     fn a_recording_format_parses_from_its_extension_and_an_unknown_one_names_the_choices() {
-        for format in [RecordFormat::Mcap, RecordFormat::Rrd] {
+        for format in [RecordFormat::Mcap, RecordFormat::Rrd, RecordFormat::Mp4] {
             assert_eq!(format.extension().parse::<RecordFormat>().unwrap(), format);
         }
         let err = format!("{:#}", "bag".parse::<RecordFormat>().unwrap_err());
-        assert!(err.contains("bag") && err.contains("mcap") && err.contains("rrd"), "{err}");
+        assert!(err.contains("bag") && err.contains("mcap") && err.contains("rrd") && err.contains("mp4"), "{err}");
     }
 }

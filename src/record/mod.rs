@@ -14,6 +14,8 @@
 //!   package leaves it off, and an `.rrd` is then an error naming the feature).
 //! - `episodes`: a policy's episodes on a task into a file (`quadcl record`) or a viewer
 //!   (`quadcl view`).
+//! - `video`: a policy's episodes on one or more tasks side by side as an MP4 video, rendered
+//!   on the CPU (`quadcl record --format mp4`, `quadcl eval --video`).
 
 mod episodes;
 mod foxglove;
@@ -24,6 +26,7 @@ mod rerun;
 #[cfg(feature = "rerun")]
 mod rerun_scene;
 mod sample;
+mod video;
 
 pub use self::mcap::TOPICS;
 #[cfg(feature = "rerun")]
@@ -34,3 +37,4 @@ pub use episodes::{record_episodes, RecordFormat, RecordOptions, RecordSummary, 
 pub use recorder::Recorder;
 #[cfg(feature = "rerun")]
 pub use rerun_scene::{RerunScene, ROBOT_ENTITY};
+pub use video::{record_video, VideoSize};

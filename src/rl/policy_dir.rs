@@ -36,6 +36,14 @@ pub struct LoadedPolicy {
     pub info: PolicyInfo,
 }
 
+impl LoadedPolicy {
+    /// The learned task whose network acts (`load_for_task` of a task the policy never learned
+    /// acts with its last learned task's: this names it).
+    pub fn recalled_task(&self) -> Option<&str> {
+        self.tasks.get(self.agent.task()).map(String::as_str)
+    }
+}
+
 fn put_normalizer(prefix: &str, n: &RunningNormalizer, out: &mut BTreeMap<String, Tensor>) -> anyhow::Result<()> {
     out.insert(format!("{prefix}.mean"), Tensor::new(n.mean().as_slice(), &Device::Cpu)?);
     out.insert(format!("{prefix}.var"), Tensor::new(n.var().as_slice(), &Device::Cpu)?);

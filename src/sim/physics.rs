@@ -383,6 +383,24 @@ impl RobotSim {
         self.joint_links.map(|id| self.mb().link(id).expect("leg link exists").local_to_world().translation.into())
     }
 
+    /// Every robot collider (its shape, world pose and part), then the ground's, as the last
+    /// physics step left them: what a picture of the world draws (`render::Scene`).
+    pub fn collider_shapes(&self) -> (Vec<(SharedShape, Pose, Part)>, Vec<(SharedShape, Pose)>) {
+        let shape = |c: ColliderHandle| {
+            let c = &self.world.colliders[c];
+            (c.shared_shape().clone(), *c.position())
+        };
+        let robot = self
+            .parts
+            .iter()
+            .map(|&(c, part)| {
+                let (s, p) = shape(c);
+                (s, p, part)
+            })
+            .collect();
+        (robot, vec![shape(self.ground)])
+    }
+
     /// Adds `dv` (world x, y) to the trunk's linear velocity (a push).
     pub fn push(&mut self, dv: [f32; 2]) {
         let mut vel = self.mb_mut().generalized_velocity_mut();

@@ -59,6 +59,8 @@ pub enum Action {
     Save,
     /// The selected task in Rerun's 3D viewer (20 s, also saved as .rrd).
     OpenViewer,
+    /// Write a short video of the selected task (its last checkpoint) into the run folder.
+    WriteVideo,
     CurveMetricNext,
     /// Smoothing weight up / down; toggle off and on.
     SmoothingUp,
@@ -93,6 +95,12 @@ pub enum Outgoing {
     Robot(Option<(PathBuf, String)>),
     /// Show (policy, task) in the Rerun viewer and save it into the `.rrd` file.
     View {
+        policy: PathBuf,
+        task: String,
+        out: PathBuf,
+    },
+    /// Write a video of (policy, task) into the `.mp4` file, in the worker.
+    Video {
         policy: PathBuf,
         task: String,
         out: PathBuf,
@@ -296,6 +304,7 @@ impl App {
                 self.say("saving metrics.json and the log (a task in progress is saved when it ends)");
             }
             Action::OpenViewer => self.view_selected(),
+            Action::WriteVideo => self.film_selected(),
             Action::CurveMetricNext => self.metric = self.metric.next(),
             Action::SmoothingUp => self.smoothing = (self.smoothing + 0.05).min(0.99),
             Action::SmoothingDown => self.smoothing = (self.smoothing - 0.05).max(0.0),
@@ -403,6 +412,18 @@ impl App {
         let out = o.run_dir.join(crate::engine::EPISODES).join(format!("workbench-{name}.rrd"));
         self.say(format!("opening {} in the Rerun viewer (and saving it to {}) ...", row.task, out.display()));
         self.outbox.push(Outgoing::View { policy, task: row.task, out });
+    }
+
+    fn film_selected(&mut self) {
+        let (Some(row), Some(o)) = (self.selected(), self.opened.as_ref()) else { return };
+        let Some(policy) = o.last_checkpoint.clone().filter(|_| row.learned()) else {
+            self.say(format!("{} is not learned yet: nothing to film", row.task));
+            return;
+        };
+        let name = crate::engine::task_file_name(&row.task);
+        let out = o.run_dir.join(crate::engine::VIDEOS).join(format!("workbench-{name}.mp4"));
+        self.say(format!("writing 10 s of {} to {} ...", row.task, out.display()));
+        self.outbox.push(Outgoing::Video { policy, task: row.task, out });
     }
 
     /// Asks the engine for the transfer preview of the next step's related tasks.

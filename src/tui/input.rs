@@ -60,6 +60,7 @@ pub fn key_action(app: &App, key: &KeyEvent) -> Option<Action> {
         KeyCode::Char('r') => Action::ToggleRunThrough,
         KeyCode::Char('S') => Action::Save,
         KeyCode::Char('v') => Action::OpenViewer,
+        KeyCode::Char('V') => Action::WriteVideo,
         KeyCode::Char('m') => Action::CurveMetricNext,
         KeyCode::Char('s') => Action::SmoothingToggle,
         KeyCode::Char('+' | '=') => Action::SmoothingUp,

@@ -62,6 +62,7 @@ pub fn dispatch(app: &mut App, worker: &mut Worker) {
             Outgoing::Robot(Some((policy, task))) => worker.start_robot(policy, task),
             Outgoing::Robot(None) => worker.stop_robot(),
             Outgoing::View { policy, task, out } => worker.view(policy, task, out),
+            Outgoing::Video { policy, task, out } => worker.film(policy, task, out),
         }
     }
 }

@@ -290,6 +290,28 @@ impl Worker {
         self.stopping.push(handle);
     }
 
+    /// Writes 10 s of `task` (480 x 360, the env's random commands) into `out` on a thread of its
+    /// own; the screen hears how it went.
+    pub fn film(&mut self, policy: PathBuf, task: String, out: PathBuf) {
+        use crate::record::{record_video, RecordOptions, VideoSize};
+        let tx = self.sender.clone();
+        let handle = std::thread::spawn(move || {
+            let options = RecordOptions { seconds: 10.0, episodes: None, command: None, seed: 1, force: true };
+            let message = match record_video(&policy, std::slice::from_ref(&task), &out, VideoSize::default(), &options)
+            {
+                Ok(s) => format!(
+                    "wrote {:.0} s of {task} to {} ({:.1} MB)",
+                    s.sim_seconds,
+                    out.display(),
+                    s.bytes as f64 / 1e6
+                ),
+                Err(e) => format!("filming {task} failed: {}", crate::util::text::error_text(&e)),
+            };
+            let _ = tx.send(WorkerMsg::Recorded { task, message });
+        });
+        self.stopping.push(handle);
+    }
+
     /// Tells the robot view's thread to stop (without waiting for it: the UI stays responsive).
     pub fn stop_robot(&mut self) {
         if let Some(stop) = self.robot.take() {

@@ -26,6 +26,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("← → enter", "next task: change the row (switch, mode, related task)"),
     ("a", "next task: type a task to add at the end (e.g. invert:RR+noise:FR)"),
     ("v", "3D: 20 s of the task in the Rerun viewer (started if needed), saved as .rrd"),
+    ("V", "video: 10 s of the task as MP4 (videos/workbench-TASK.mp4; ffmpeg on PATH)"),
 ];
 
 pub fn draw(f: &mut Frame, area: Rect) {
