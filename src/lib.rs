@@ -21,7 +21,7 @@
 //! | [`render`] | pictures without a GPU: a ray-cast frame of a `LocomotionEnv` from a tracking camera, text on frames, PNG, MP4 through ffmpeg; the one font | `util`, `sim` |
 //! | [`record`] | recorders of simulation steps: episodes as MCAP for Foxglove and as Rerun `.rrd` or a live Rerun viewer (`quadcl record`, `quadcl view`) | `util`, `config`, `sim`, `nn`, `rl`, `render` |
 //! | [`sweep`] | grids of runs: a sweep file planned into cells, run here (child processes) or as a Slurm array job, status, collected with bootstrap intervals over seeds | `util`, `engine` |
-//! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread, the Sweep screen | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record`, `sweep` |
+//! | [`tui`] | the workbench: ratatui app state, panels, input, the session's worker thread, the Sweep screen | `util`, `config`, `sim`, `nn`, `rl`, `cl`, `engine`, `record`, `render`, `sweep` |
 //!
 //! Two Cargo features, both on by default, build the parts a library user may not
 //! want: `workbench` (the [`tui`] module, ratatui) and `rerun` (the Rerun recorders

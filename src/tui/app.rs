@@ -134,6 +134,8 @@ impl Live {
 pub struct RobotView {
     pub task: Option<String>,
     pub frame: Option<RobotFrame>,
+    /// The last picture of the robot (drawn in block characters where the panel is large enough).
+    pub picture: Option<crate::render::Frame>,
     pub error: Option<String>,
 }
 

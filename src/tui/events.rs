@@ -36,6 +36,10 @@ impl App {
                 self.robot.frame = Some(*frame);
             }
             WorkerMsg::Robot { .. } => {}
+            WorkerMsg::RobotPicture { task, picture } if self.robot.task.as_ref() == Some(&task) => {
+                self.robot.picture = Some(*picture);
+            }
+            WorkerMsg::RobotPicture { .. } => {}
             WorkerMsg::Recorded { message, .. } => self.say(message),
             WorkerMsg::RobotFailed { task, error } => {
                 self.robot.error = Some(error.clone());

@@ -48,6 +48,11 @@ pub struct Opened {
     pub queued_transfer: Option<(Vec<String>, TransferInit)>,
 }
 
+/// The robot view's pictures: one every this many control steps (10 a second for the A1) ...
+pub const PICTURE_EVERY: u32 = 5;
+/// ... of this many pixels (about 3 ms each on one core); the panel scales it to its cells.
+pub const PICTURE_SIZE: (usize, usize) = (160, 120);
+
 /// A message from the worker thread.
 #[derive(Debug, Clone)]
 pub enum WorkerMsg {
@@ -61,6 +66,11 @@ pub enum WorkerMsg {
     Robot {
         task: String,
         frame: Box<RobotFrame>,
+    },
+    /// A picture of task `task`'s robot (`render`), every [`PICTURE_EVERY`] control steps.
+    RobotPicture {
+        task: String,
+        picture: Box<crate::render::Frame>,
     },
     /// A recording asked for from the workbench ended (the message says where, or why not).
     Recorded {
@@ -248,6 +258,17 @@ impl Worker {
                     Err(e) => {
                         let _ = tx.send(WorkerMsg::RobotFailed { task, error: crate::util::text::error_text(&e) });
                         return;
+                    }
+                }
+                if steps % PICTURE_EVERY == 0 {
+                    let (w, h) = PICTURE_SIZE;
+                    // Closer than a video's camera: the panel has a few dozen cells.
+                    let camera = crate::render::Camera { distance: 1.0, ..Default::default() };
+                    if let Ok(picture) = crate::render::frame_of(viewer.env(), &camera, w, h) {
+                        if tx.send(WorkerMsg::RobotPicture { task: task.clone(), picture: Box::new(picture) }).is_err()
+                        {
+                            return;
+                        }
                     }
                 }
                 steps += 1;
