@@ -39,6 +39,7 @@ sweeps=(
   "fig4-budget|iterations=500 name=ours|0|"
   "ladder|arm=finetune|0|"
   "ladder-candidates|arm=finetune|0|"
+  "paper-shape|name=ours|0|"
 )
 shift_file=scenes/findings/sim2real.shift.toml
 progress=policies/findings/progress
