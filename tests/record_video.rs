@@ -164,3 +164,29 @@ fn a_run_with_videos_films_each_task_it_learns_and_without_ffmpeg_only_warns() {
         assert_eq!((codec.as_str(), w, h, frames), ("h264", 320, 240, 300), "{v}: 6 s at 50 fps");
     }
 }
+
+#[test]
+fn a_filmstrip_has_a_row_of_pictures_per_task_with_the_perturbed_leg_in_red_on_its_row_only() {
+    use quadcl::record::{filmstrip, Filmstrip};
+    let strip = Filmstrip { frames: 3, size: VideoSize { width: 80, height: 60 }, ..Filmstrip::default() };
+    let picture = filmstrip(&base(), &["none".to_string(), "crash:FL".to_string()], &strip).unwrap();
+    assert_eq!((picture.width, picture.height), (240, 120));
+    let red = |y0: usize| {
+        (y0..y0 + 60)
+            .flat_map(|y| (0..240).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let [r, g, b] = picture.pixel(x, y);
+                r > 150 && g < 110 && b < 110
+            })
+            .count()
+    };
+    assert_eq!(red(0), 0, "none: no leg perturbed");
+    assert!(red(60) > 10, "crash:FL: its front-left leg in red");
+    // Three different instants of the gait.
+    let tile = |i: usize| {
+        (0..60)
+            .flat_map(|y| picture.rgb[3 * (y * 240 + 80 * i)..3 * (y * 240 + 80 * i + 80)].to_vec())
+            .collect::<Vec<u8>>()
+    };
+    assert!(tile(0) != tile(1) && tile(1) != tile(2));
+}

@@ -37,4 +37,4 @@ pub use episodes::{record_episodes, RecordFormat, RecordOptions, RecordSummary, 
 pub use recorder::Recorder;
 #[cfg(feature = "rerun")]
 pub use rerun_scene::{RerunScene, ROBOT_ENTITY};
-pub use video::{record_video, VideoSize};
+pub use video::{filmstrip, record_video, Filmstrip, VideoSize};

@@ -110,3 +110,61 @@ pub fn record_video(
         bytes,
     })
 }
+
+/// A filmstrip's pictures: how many per task, how far apart, after how long a walk, how large.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Filmstrip {
+    pub frames: usize,
+    /// Simulated seconds between pictures.
+    pub every_s: f64,
+    /// Simulated seconds walked before the first picture (the gait settled).
+    pub after_s: f64,
+    pub size: VideoSize,
+    /// The command held (vx, vy, wz).
+    pub command: [f32; 3],
+}
+
+impl Default for Filmstrip {
+    /// Six pictures 0.06 s apart (about one trot cycle) after 2 s at 0.5 m/s forward, 200 x 150.
+    fn default() -> Self {
+        Self {
+            frames: 6,
+            every_s: 0.06,
+            after_s: 2.0,
+            size: VideoSize { width: 200, height: 150 },
+            command: [0.5, 0.0, 0.0],
+        }
+    }
+}
+
+/// `policy`'s gait on each of `tasks` as one picture: a row of `strip.frames` pictures per
+/// task, the task and the time on each row's first.
+pub fn filmstrip(policy: &Path, tasks: &[String], strip: &Filmstrip) -> anyhow::Result<Frame> {
+    anyhow::ensure!(!tasks.is_empty() && strip.frames > 0, "a filmstrip of no task or no picture");
+    // Closer than a video's camera: the pictures are small.
+    let camera = Camera { distance: 1.1, ..Default::default() };
+    let mut rows = Vec::with_capacity(tasks.len());
+    for task in tasks {
+        let mut viewer = RobotViewer::new(policy, task, 1, Some(strip.command))?;
+        let dt = f64::from(viewer.policy_dt());
+        let steps = |s: f64| (s / dt).round().max(1.0) as usize;
+        for _ in 0..steps(strip.after_s) {
+            viewer.step()?;
+        }
+        let mut pictures = Vec::with_capacity(strip.frames);
+        for i in 0..strip.frames {
+            if i > 0 {
+                for _ in 0..steps(strip.every_s) {
+                    viewer.step()?;
+                }
+            }
+            let mut p = frame_of(viewer.env(), &camera, strip.size.width, strip.size.height)?;
+            let at = strip.after_s + i as f64 * steps(strip.every_s) as f64 * dt;
+            let label = if i == 0 { format!("{task}  {at:.2} s") } else { format!("{at:.2} s") };
+            p.write_lines(&[label], (strip.size.height as f64 / 12.0).max(9.0))?;
+            pictures.push(p);
+        }
+        rows.push(Frame::side_by_side(&pictures)?);
+    }
+    Frame::stacked(&rows)
+}

@@ -72,6 +72,17 @@ impl Frame {
     }
 }
 
+impl Frame {
+    /// Frames stacked top to bottom (all of one width).
+    pub fn stacked(frames: &[Frame]) -> anyhow::Result<Frame> {
+        let width = frames.first().context("no frame to stack")?.width;
+        anyhow::ensure!(frames.iter().all(|f| f.width == width), "frames of different widths stacked");
+        let height = frames.iter().map(|f| f.height).sum();
+        check_size(width, height)?;
+        Ok(Frame { width, height, rgb: frames.iter().flat_map(|f| f.rgb.iter().copied()).collect() })
+    }
+}
+
 /// A width and height a frame may have.
 pub fn check_size(width: usize, height: usize) -> anyhow::Result<()> {
     anyhow::ensure!(

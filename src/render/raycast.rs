@@ -73,7 +73,7 @@ fn shade(scene: &Scene, ray: &Ray) -> [f32; 3] {
     let sky = sky(ray.dir);
     let (t, normal, base) = match (robot, ground) {
         (Some((t, n, body)), _) => (t, n, body.colour),
-        (None, Some((t, n))) => (t, n, grid(ray.point_at(t))),
+        (None, Some((t, n))) => (t, n, grid(ray.point_at(t), t)),
         (None, None) => return sky,
     };
     let point = ray.point_at(t);
@@ -96,19 +96,27 @@ fn shade(scene: &Scene, ray: &Ray) -> [f32; 3] {
     std::array::from_fn(|i| base[i] * light * (1.0 - fog) + sky[i] * fog)
 }
 
-/// The ground's colour at `point`: light and dark 0.5 m squares with darker 1 m lines.
-fn grid(point: Vector) -> [f32; 3] {
+/// Beyond this distance, metres, the ground's pattern has faded out (one ray a pixel would
+/// alias it into noise there).
+const GRID_FADE: f32 = 10.0;
+
+/// The ground's colour at `point`, seen from `distance`: light and dark 0.5 m squares with
+/// darker 1 m lines, fading to plain ground with distance.
+fn grid(point: Vector, distance: f32) -> [f32; 3] {
     let (x, y) = (point.x, point.y);
     let line = |v: f32| {
         let f = v - v.round();
         f.abs() < 0.008
     };
-    if line(x) || line(y) {
-        return [0.45, 0.45, 0.43];
-    }
-    let checker = ((x * 2.0).floor() as i64 + (y * 2.0).floor() as i64).rem_euclid(2) == 0;
-    let k = if checker { 1.0 } else { 0.92 };
-    GROUND.map(|c| c * k)
+    let k = if line(x) || line(y) {
+        0.56
+    } else if ((x * 2.0).floor() as i64 + (y * 2.0).floor() as i64).rem_euclid(2) == 0 {
+        1.0
+    } else {
+        0.92
+    };
+    let fade = (1.0 - distance / GRID_FADE).clamp(0.0, 1.0);
+    GROUND.map(|c| c * (1.0 - (1.0 - k) * fade))
 }
 
 /// The sky's colour in direction `dir`: pale at the horizon, deeper blue overhead.
