@@ -57,6 +57,6 @@ fn the_ladders_fresh_weight_arms_redraw_the_bases_vacant_weights_and_refuse_a_de
     let redrawn = with("base_vacant = \"redrawn\"\n");
     assert_eq!(learned(&redrawn).unwrap(), learned(&text).unwrap(), "the base's tasks are kept");
     let dense = redrawn.replace("name = \"ours\"", "name = \"finetune\"");
-    let err = format!("{:#}", learned(&dense).err().expect("a dense method has no vacant weights"));
+    let err = format!("{:#}", learned(&dense).expect_err("a dense method has no vacant weights"));
     assert!(err.contains("base_vacant") && err.contains("finetune"), "{err}");
 }

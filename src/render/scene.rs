@@ -47,7 +47,8 @@ impl Scene {
     /// The scene of `env` as its last step left it; the legs its task perturbs drawn in red.
     pub fn of_env(env: &LocomotionEnv) -> Self {
         let perturbed: Vec<usize> = env.task().items().iter().map(|(_, leg)| leg.index()).collect();
-        let (robot, ground) = env.collider_shapes();
+        let shapes = env.collider_shapes();
+        let (robot, ground) = (shapes.robot, shapes.ground);
         let colour = |part: Part| match part {
             Part::Trunk | Part::Other => TRUNK,
             Part::Foot(_) => FOOT,
@@ -73,5 +74,5 @@ fn body(shape: SharedShape, pose: Pose, colour: [f32; 3]) -> Body {
 fn flat_top(ground: &[Body]) -> Option<f32> {
     let [only] = ground else { return None };
     let cuboid = only.shape.as_cuboid()?;
-    only.pose.rotation.is_near_identity().then(|| only.pose.translation.z + cuboid.half_extents.z)
+    only.pose.rotation.is_near_identity().then_some(only.pose.translation.z + cuboid.half_extents.z)
 }

@@ -14,7 +14,7 @@ use super::env_setup::{build_sim, default_pose, first_non_finite, joint_gains, s
 use super::episode::{EpisodeStats, PhysicsBlowUp, Step};
 use super::obs::{self, ObsInput, ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_OBS_DIM};
 use super::observe::{StepInfo, StepObserver};
-use super::physics::{Part, PdGains, PhysicsParams, RawState, RobotSim};
+use super::physics::{PdGains, PhysicsParams, RawState, RobotSim, WorldShapes};
 use super::reward::{self, RewardInput};
 use super::robot::RobotModel;
 use super::tasks::Perturbation;
@@ -22,8 +22,6 @@ use crate::config::EnvConfig;
 use anyhow::{bail, Context};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rapier3d::math::Pose;
-use rapier3d::prelude::SharedShape;
 use std::sync::Arc;
 
 mod replay;
@@ -251,8 +249,8 @@ impl LocomotionEnv {
     }
 
     /// The robot's and the ground's colliders as the last step left them, for pictures
-    /// ([`RobotSim::collider_shapes`]).
-    pub fn collider_shapes(&self) -> (Vec<(SharedShape, Pose, Part)>, Vec<(SharedShape, Pose)>) {
+    /// (the simulator's [`WorldShapes`]).
+    pub fn collider_shapes(&self) -> WorldShapes {
         self.sim.collider_shapes()
     }
 

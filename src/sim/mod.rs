@@ -41,7 +41,7 @@ pub use env_setup::{default_pose, joint_gains};
 pub use episode::{EpisodeSummary, PhysicsBlowUp, Step};
 pub use obs::{ACT_DIM, HISTORY_LEN, OBS_DIM, PRIV_BASE_LIN_VEL, PRIV_OBS_DIM};
 pub use observe::{LinkPose, StepInfo, StepObserver};
-pub use physics::{Part, PdGains, RawState};
+pub use physics::{Part, PdGains, RawState, WorldShapes};
 pub use pose::{LegPose, RobotPose};
 pub use robot::{Leg, LegJoint, RobotModel, JOINTS_PER_LEG, NUM_LEGS};
 pub use stand::{stand_test, StandReport};

@@ -71,6 +71,14 @@ pub struct RawState {
     pub foot_pos: [[f32; 3]; NUM_LEGS],
 }
 
+/// The world's colliders with their world poses (shapes are shared, not copied).
+pub struct WorldShapes {
+    /// Each robot collider's shape, pose and part.
+    pub robot: Vec<(SharedShape, Pose, Part)>,
+    /// The ground's colliders.
+    pub ground: Vec<(SharedShape, Pose)>,
+}
+
 /// One robot in its own world.
 pub struct RobotSim {
     world: PhysicsWorld,
@@ -383,9 +391,9 @@ impl RobotSim {
         self.joint_links.map(|id| self.mb().link(id).expect("leg link exists").local_to_world().translation.into())
     }
 
-    /// Every robot collider (its shape, world pose and part), then the ground's, as the last
-    /// physics step left them: what a picture of the world draws (`render::Scene`).
-    pub fn collider_shapes(&self) -> (Vec<(SharedShape, Pose, Part)>, Vec<(SharedShape, Pose)>) {
+    /// Every robot collider and the ground's as the last physics step left them: what a
+    /// picture of the world draws (`render::Scene`).
+    pub fn collider_shapes(&self) -> WorldShapes {
         let shape = |c: ColliderHandle| {
             let c = &self.world.colliders[c];
             (c.shared_shape().clone(), *c.position())
@@ -394,11 +402,11 @@ impl RobotSim {
             .parts
             .iter()
             .map(|&(c, part)| {
-                let (s, p) = shape(c);
-                (s, p, part)
+                let (shape, pose) = shape(c);
+                (shape, pose, part)
             })
             .collect();
-        (robot, vec![shape(self.ground)])
+        WorldShapes { robot, ground: vec![shape(self.ground)] }
     }
 
     /// Adds `dv` (world x, y) to the trunk's linear velocity (a push).
