@@ -402,30 +402,36 @@ impl App {
         }
     }
 
+    /// The selected task's (policy, task, run-folder file `FOLDER/workbench-TASK.EXT`) when it is
+    /// learned; else says that there is nothing to `what` yet.
+    fn selected_learned(&mut self, what: &str, folder: &str, ext: &str) -> Option<(PathBuf, String, PathBuf)> {
+        let (row, o) = (self.selected()?, self.opened.as_ref()?);
+        let policy = o.last_checkpoint.clone().filter(|_| row.learned());
+        let out = o.run_dir.join(folder).join(format!("workbench-{}.{ext}", crate::engine::task_file_name(&row.task)));
+        match policy {
+            Some(policy) => Some((policy, row.task, out)),
+            None => {
+                self.say(format!("{} is not learned yet: nothing to {what}", row.task));
+                None
+            }
+        }
+    }
+
     /// The selected learned task in Rerun's 3D viewer for 20 s, saved as `.rrd` into the run
     /// folder's `episodes/` too.
     fn view_selected(&mut self) {
-        let (Some(row), Some(o)) = (self.selected(), self.opened.as_ref()) else { return };
-        let Some(policy) = o.last_checkpoint.clone().filter(|_| row.learned()) else {
-            self.say(format!("{} is not learned yet: nothing to show in 3D", row.task));
+        let Some((policy, task, out)) = self.selected_learned("show in 3D", crate::engine::EPISODES, "rrd") else {
             return;
         };
-        let name = crate::engine::task_file_name(&row.task);
-        let out = o.run_dir.join(crate::engine::EPISODES).join(format!("workbench-{name}.rrd"));
-        self.say(format!("opening {} in the Rerun viewer (and saving it to {}) ...", row.task, out.display()));
-        self.outbox.push(Outgoing::View { policy, task: row.task, out });
+        self.say(format!("opening {task} in the Rerun viewer (and saving it to {}) ...", out.display()));
+        self.outbox.push(Outgoing::View { policy, task, out });
     }
 
+    /// 10 s of the selected learned task as a video in the run folder's `videos/`, written by the worker.
     fn film_selected(&mut self) {
-        let (Some(row), Some(o)) = (self.selected(), self.opened.as_ref()) else { return };
-        let Some(policy) = o.last_checkpoint.clone().filter(|_| row.learned()) else {
-            self.say(format!("{} is not learned yet: nothing to film", row.task));
-            return;
-        };
-        let name = crate::engine::task_file_name(&row.task);
-        let out = o.run_dir.join(crate::engine::VIDEOS).join(format!("workbench-{name}.mp4"));
-        self.say(format!("writing 10 s of {} to {} ...", row.task, out.display()));
-        self.outbox.push(Outgoing::Video { policy, task: row.task, out });
+        let Some((policy, task, out)) = self.selected_learned("film", crate::engine::VIDEOS, "mp4") else { return };
+        self.say(format!("writing 10 s of {task} to {} ...", out.display()));
+        self.outbox.push(Outgoing::Video { policy, task, out });
     }
 
     /// Asks the engine for the transfer preview of the next step's related tasks.
