@@ -245,3 +245,33 @@ fn a_policy_command_that_stops_answering_is_an_error_naming_it() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("policy command `exit 3`") && stderr.contains('3'), "{stderr}");
 }
+
+#[test]
+fn the_contract_carries_the_world_the_policy_was_trained_in() {
+    use quadcl::export::contract::{contract, RobotFacts};
+    let loaded = quadcl::rl::load_policy_or_checkpoint(&masked_policy()).unwrap().policy;
+    let env = &loaded.info.config.env;
+    let robot = RobotFacts::of(env).unwrap();
+    let policy = DensePolicy::from_loaded(&loaded, &robot.default_pose, &robot.limits).unwrap();
+    let meta: BTreeMap<String, serde_json::Value> = contract(&policy, &robot, env, "masked", "test")
+        .into_iter()
+        .map(|(k, v)| (k, serde_json::from_str(&v).unwrap()))
+        .collect();
+    assert_eq!(meta["contract_version"], 2);
+    // The URDF itself, and its hash, so another simulator builds the same robot.
+    let text = meta["robot_urdf_text"].as_str().unwrap();
+    assert!(text.contains("<robot") && meta["robot_urdf_sha256"] == quadcl::util::sha256_hex(text.as_bytes()));
+    // The A1's efforts: 20 N m at the hips, 55 at thighs and calves (not 33.5 everywhere).
+    let effort: Vec<f32> = serde_json::from_value(meta["joint_effort_limits"].clone()).unwrap();
+    let names: Vec<String> = serde_json::from_value(meta["joint_names"].clone()).unwrap();
+    for (name, e) in names.iter().zip(&effort) {
+        let want = if name.contains("hip") { 20.0 } else { 55.0 };
+        assert!((e - want).abs() < 1.0, "{name}: {e}");
+    }
+    assert_eq!(meta["start_height"], serde_json::json!(env.start_height));
+    let damping: Vec<f32> = serde_json::from_value(meta["pd_law"]["effective_damping"].clone()).unwrap();
+    assert!((damping[0] - (env.kd + env.kp * env.physics_dt)).abs() < 1e-5, "{damping:?}");
+    assert_eq!(meta["termination"]["max_tilt_rad"], serde_json::json!(env.max_tilt_rad));
+    assert_eq!(meta["commands"]["vx"], serde_json::json!(env.cmd_vx));
+    assert_eq!(meta["training_world"]["friction_range"], serde_json::json!(env.friction_range));
+}

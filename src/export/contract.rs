@@ -1,7 +1,8 @@
 //! The deployment contract an exported policy carries as metadata (ONNX
 //! `metadata_props`, safetensors `__metadata__`): what a robot-side program
 //! must know to feed the model and use its output. Every value is JSON text
-//! (`json.loads(meta["joint_names"])` in Python), keys in snake_case.
+//! (`json.loads(meta["joint_names"])` in Python), keys in snake_case. Version 2 adds the physics
+//! the policy was trained under (docs/export.md lists every key).
 
 use super::dense_policy::DensePolicy;
 use crate::config::EnvConfig;
@@ -10,8 +11,10 @@ use crate::util::Provenance;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 
-/// Version of this contract's keys and graph layout; bumped when either changes meaning.
-pub const CONTRACT_VERSION: u32 = 1;
+/// Version of this contract's keys and graph layout; bumped when either changes meaning
+/// (2: the physics a policy was trained under, its start, termination, commands, torque limits
+/// and the URDF itself, so that another simulator can be set up from the contract alone).
+pub const CONTRACT_VERSION: u32 = 2;
 
 /// One named part of an observation frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,7 +49,11 @@ pub struct RobotFacts {
     pub kp: Vec<f32>,
     pub kd: Vec<f32>,
     pub limits: Vec<(f32, f32)>,
+    /// Each joint's effort limit from the URDF, N m (the PD torque is clamped to it).
+    pub effort: Vec<f32>,
     pub urdf: String,
+    /// The robot description's text, as the simulator read it.
+    pub urdf_text: String,
 }
 
 impl RobotFacts {
@@ -60,9 +67,82 @@ impl RobotFacts {
             kp: gains.kp.to_vec(),
             kd: gains.kd.to_vec(),
             limits: robot.joints.iter().map(|j| (j.lower, j.upper)).collect(),
+            effort: robot.joints.iter().map(|j| j.effort).collect(),
             urdf: env.urdf.clone(),
+            urdf_text: description_text(env)?,
         })
     }
+}
+
+/// The robot description's text: the file the run named, or the shipped copy compiled in.
+fn description_text(env: &EnvConfig) -> anyhow::Result<String> {
+    let path = std::path::Path::new(&env.urdf);
+    if path.exists() {
+        return std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()));
+    }
+    sim::shipped::read_crate_file(&env.urdf)
+}
+
+/// What another simulator needs to reproduce the world the policy was trained in (version 2).
+fn physics_contract(robot: &RobotFacts, env: &EnvConfig) -> [(&'static str, Value); 9] {
+    let effective_damping: Vec<f32> = robot.kp.iter().zip(&robot.kd).map(|(kp, kd)| kd + kp * env.physics_dt).collect();
+    [
+        ("robot_urdf_sha256", json!(crate::util::sha256_hex(robot.urdf_text.as_bytes()))),
+        ("robot_urdf_text", json!(robot.urdf_text)),
+        ("start_height", json!(env.start_height)),
+        ("joint_effort_limits", json!(robot.effort)),
+        (
+            "pd_law",
+            json!({
+                "torque": "clamp(kp * s * (target - q) - kd * s * qd, -effort * s, effort * s), s = the episode's motor strength (1 when not randomised)",
+                "integration": "each physics step as rapier's implicit joint spring (backward Euler): a stiffness kp pulls q towards the target, so besides kd the spring damps by about kp * physics_dt",
+                "effective_damping": effective_damping,
+                "torque_clamp": "where the PD torque at the step's start exceeds the effort limit, the spring's rest point moves so that it asks for exactly the limit",
+                "joint_limits": "a joint that would cross a limit within a step meets a stiff spring resting on the limit (a mechanical stop)",
+            }),
+        ),
+        (
+            "frames",
+            json!({
+                "world": "right-handed, z up, gravity -9.81 m/s^2 along z",
+                "base_ang_vel_trunk_frame": "the trunk's angular velocity in its own frame, rad/s, times its obs_layout scale",
+                "projected_gravity": "the unit gravity vector in the trunk frame: (0, 0, -1) when upright",
+                "command_vx_vy_wz": "forward and lateral velocity in the trunk's frame (m/s) and yaw rate (rad/s), times their scales",
+                "joint_pos_minus_default": "joint angle minus default_joint_pos, rad, in joint_names order",
+                "lin_vel_err": "the evaluation's velocity error is measured in the trunk frame, horizontal components",
+            }),
+        ),
+        (
+            "commands",
+            json!({
+                "vx": env.cmd_vx, "vy": env.cmd_vy, "wz": env.cmd_wz,
+                "resample_s": env.command_resample_s,
+                "history": "each history frame keeps the command it was observed with: a new command appears in the newest frame only (right after a reset every frame is a copy of the first observation, so all show it)",
+            }),
+        ),
+        (
+            "termination",
+            json!({
+                "fall": "the trunk touches the ground, or the tilt passes max_tilt_rad (projected_gravity z > -cos(max_tilt_rad))",
+                "max_tilt_rad": env.max_tilt_rad,
+                "time_out_s": env.episode_s,
+            }),
+        ),
+        (
+            "training_world",
+            json!({
+                "ground": "a flat plane at z = 0",
+                "friction_nominal": 1.0,
+                "randomize": env.randomize,
+                "friction_range": env.friction_range,
+                "added_mass_range_kg": env.added_mass_range,
+                "motor_strength_range": env.motor_strength_range,
+                "push_interval_s": env.push_interval_s,
+                "push_max_vel": env.push_max_vel,
+                "physics_dt_note": "physics_dt is rapier's step in training; another simulator should use its own stable step with the same control_dt",
+            }),
+        ),
+    ]
 }
 
 /// The metadata of an exported task, each value JSON text.
@@ -114,7 +194,7 @@ pub fn contract(
         ("quadcl_version", json!(provenance.quadcl_version)),
         ("git_commit", json!(provenance.git_commit)),
     ];
-    values.into_iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+    values.into_iter().chain(physics_contract(robot, env)).map(|(k, v)| (k.to_string(), v.to_string())).collect()
 }
 
 #[cfg(test)]
