@@ -151,3 +151,21 @@ fn the_command_writes_what_it_prints() {
         serde_json::from_str(&std::fs::read_to_string(tmp.path().join(FINETUNES_JSON)).unwrap()).unwrap();
     assert_eq!(json, finetunes(tmp.path()).unwrap());
 }
+
+#[test]
+fn the_figure_draws_each_seeds_before_and_after_with_the_fine_tuned_task_in_its_own_colour() {
+    let tmp = folder(&[
+        ("seed1", report("crash:FL", 0.2, 0.8, None)),
+        ("seed2", report("crash:FL", 0.3, 0.7, None)),
+        ("seed3", report("crash:FL", 0.1, 0.9, None)),
+    ]);
+    let png = quadcl::plot::finetunes_png(&finetunes(tmp.path()).unwrap()).unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(png)).read_info().unwrap();
+    let mut rgb = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut rgb).unwrap();
+    assert_eq!(info.width as usize, 140 + 78 * TASKS.len());
+    // The fine-tuned task's dots (orange) and the other tasks' afters (blue) are both drawn.
+    let count = |c: [u8; 3]| rgb.chunks(3).filter(|p| *p == c).count();
+    assert!(count([255, 127, 14]) > 20, "orange: the fine-tuned task after");
+    assert!(count([31, 119, 180]) > 20, "blue: the other tasks after");
+}

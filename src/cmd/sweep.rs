@@ -236,10 +236,16 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             let table = sweep::finetunes_and_write(&a.dir)?;
             print!("{}", sweep::finetunes_markdown(&table));
             say_written(&a.dir, sweep::finetunes::FINETUNES_MD, sweep::finetunes::FINETUNES_JSON);
+            let figure = a.dir.join(FINETUNES_PNG);
+            quadcl::util::write_atomic(&figure, &quadcl::plot::finetunes_png(&table)?)?;
+            println!("figure: {}", figure.display());
             Ok(())
         }
     }
 }
+
+/// `quadcl sweep finetunes`'s figure beside its tables: every task before and after, per seed.
+const FINETUNES_PNG: &str = "finetunes.png";
 
 /// The line after a printed table: the two files in `dir` it was written to.
 fn say_written(dir: &std::path::Path, md: &str, json: &str) {

@@ -26,6 +26,7 @@
 
 mod data;
 mod eval_matrix;
+mod finetunes;
 mod header;
 mod legend;
 mod load;
@@ -40,6 +41,7 @@ mod task_curves;
 
 pub use data::{plasticity_parts, Curve, Measure, OverSeeds, RunData, SeedMeasure, StepCurves};
 pub use eval_matrix::{draw_eval_matrix, eval_matrix_size};
+pub use finetunes::finetunes_png;
 pub use legend::LegendEntry;
 pub use load::{load_run, RUN_METRICS, TRAIN_METRICS};
 pub use panel::{draw_line_panel, Boundary, LinePanel};

@@ -24,10 +24,19 @@ fn checked_size(figure: Figure, runs: &[RunData]) -> anyhow::Result<(u32, u32)> 
 /// `figure` of `runs` as a PNG file's bytes.
 pub fn render_png(figure: Figure, runs: &[RunData], options: &PlotOptions) -> anyhow::Result<Vec<u8>> {
     let (w, h) = checked_size(figure, runs)?;
+    encode_figure_png(w, h, |root| figure.draw(root, runs, options))
+}
+
+/// A `w` x `h` figure on white that `draw` draws, as a PNG file's bytes.
+pub(super) fn encode_figure_png(
+    w: u32,
+    h: u32,
+    draw: impl FnOnce(&DrawingArea<BitMapBackend, plotters::coord::Shift>) -> anyhow::Result<()>,
+) -> anyhow::Result<Vec<u8>> {
     let mut rgb = vec![255u8; w as usize * h as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        figure.draw(&root, runs, options)?;
+        draw(&root)?;
         root.present()?;
     }
     crate::render::encode_png(&rgb, w, h)
