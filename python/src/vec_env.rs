@@ -37,6 +37,8 @@ pub struct NativeVecEnv {
     /// None: rayon's global pool (all cores, or RAYON_NUM_THREADS), or the calling thread
     /// when the batch was made for one thread.
     pool: Option<rayon::ThreadPool>,
+    /// The pool `render` draws in when the batch steps on the calling thread (one thread).
+    picture_pool: Option<rayon::ThreadPool>,
     task: String,
     control_dt: f64,
     max_return: f64,
@@ -112,10 +114,12 @@ impl NativeVecEnv {
                 // one-thread pool only built them (rayon's global pool would start a worker per core).
                 let on_calling_thread = num_threads == Some(1);
                 env.set_on_calling_thread(on_calling_thread);
-                let pool = if on_calling_thread { None } else { pool };
+                // Pictures are drawn by rows in a pool; with one thread, in the one-thread pool.
+                let (pool, picture_pool) = if on_calling_thread { (None, pool) } else { (pool, None) };
                 Ok(Self {
                     env: Mutex::new(env),
                     pool,
+                    picture_pool,
                     task: task.to_string(),
                     control_dt: f64::from(cfg.policy_dt()),
                     max_return: quadcl::engine::max_episode_return(&cfg),
@@ -192,7 +196,7 @@ impl NativeVecEnv {
                         .map(|s| render(s, &Camera::default(), width, height))
                         .collect::<anyhow::Result<Vec<_>>>()
                 };
-                let frames = match &self.pool {
+                let frames = match self.pool.as_ref().or(self.picture_pool.as_ref()) {
                     Some(pool) => pool.install(draw)?,
                     None => draw()?,
                 };

@@ -49,6 +49,15 @@ def test_a_vector_environment_renders_a_frame_per_environment():
     assert quadcl.make_vec(num_envs=2).render() is None
 
 
+def test_one_thread_and_every_core_draw_the_same_pictures():
+    one = quadcl.make_vec(num_envs=2, num_threads=1, render_mode="rgb_array", width=64, height=48)
+    every = quadcl.make_vec(num_envs=2, render_mode="rgb_array", width=64, height=48)
+    one.reset(seed=3)
+    every.reset(seed=3)
+    for a, b in zip(one.render(), every.render()):
+        assert np.array_equal(a, b)
+
+
 def test_gymnasiums_env_checker_passes_the_render_check():
     from gymnasium.utils.env_checker import check_env
 
