@@ -69,18 +69,9 @@ impl RobotFacts {
             limits: robot.joints.iter().map(|j| (j.lower, j.upper)).collect(),
             effort: robot.joints.iter().map(|j| j.effort).collect(),
             urdf: env.urdf.clone(),
-            urdf_text: description_text(env)?,
+            urdf_text: robot.text.clone(),
         })
     }
-}
-
-/// The robot description's text: the file the run named, or the shipped copy compiled in.
-fn description_text(env: &EnvConfig) -> anyhow::Result<String> {
-    let path = std::path::Path::new(&env.urdf);
-    if path.exists() {
-        return std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()));
-    }
-    sim::shipped::read_crate_file(&env.urdf)
 }
 
 /// What another simulator needs to reproduce the world the policy was trained in (version 2).

@@ -110,6 +110,8 @@ pub struct RobotModel {
     pub total_mass: f64,
     /// Every tolerated problem of the file, one line each.
     pub warnings: Vec<String>,
+    /// The description's text as it was read (what an exported contract embeds).
+    pub text: String,
 }
 
 impl RobotModel {
@@ -209,6 +211,7 @@ impl RobotModel {
             merged,
             total_mass,
             warnings,
+            text: text.to_string(),
         })
     }
 
